@@ -1,0 +1,181 @@
+"""`demorch`: render decks, run cases, check the installation, summarise results."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+import click
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+from . import metrics
+from .case import CaseError, load_case
+from .engines import ENGINE_NAMES, EngineError, get_adapter
+from .results import read_results
+from .runner import RESULTS, render_case, run_case, with_engine
+
+console = Console(stderr=False)
+errors = Console(stderr=True)
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+DEMO_CASE = REPO_ROOT / "cases" / "sphere_slope.yaml"
+
+
+def _fail(message: str, code: int = 2) -> None:
+    errors.print(f"[bold red]error:[/] {message}", markup=True, highlight=False, soft_wrap=True)
+    sys.exit(code)
+
+
+def _default_rundir(case_name: str, engine: str) -> Path:
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path("runs") / f"{case_name}-{engine}-{stamp}"
+
+
+def _progress_callback(progress: Progress, task: Any) -> Callable[[float, float], None]:
+    def update(simulated: float, end: float) -> None:
+        progress.update(task, completed=simulated, total=end, description=f"t = {simulated:.4g} / {end:.4g} s")
+
+    return update
+
+
+def metrics_table(title: str, values: dict[str, float]) -> Table:
+    table = Table(title=title, show_header=True, header_style="bold")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for key, value in values.items():
+        table.add_row(key, f"{value:.6g}")
+    return table
+
+
+def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
+    try:
+        case = with_engine(load_case(case_path), engine)
+        rundir = output or _default_rundir(case.name, case.engine.value)
+        if (rundir / RESULTS).exists():
+            _fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        with Progress(
+            TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
+            BarColumn(),
+            TextColumn("{task.description}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console,
+            transient=False,
+        ) as progress:
+            task = progress.add_task("starting", total=case.time.duration)
+            record = run_case(case, case_path.parent, rundir, progress=_progress_callback(progress, task), timeout=timeout)
+    except CaseError as error:
+        _fail(str(error))
+    except EngineError as error:
+        _fail(str(error), code=3)
+    console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
+    console.print(f"results: {rundir / RESULTS}")
+    return record
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="dem-orchestrator")
+def main() -> None:
+    """Run LIGGGHTS and YADE from one validated case file."""
+
+
+@main.command()
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), required=True, help="Directory for the deck.")
+def render(case_path: Path, engine: str | None, output: Path) -> None:
+    """Write the engine deck for CASE_PATH without running it."""
+    try:
+        case = with_engine(load_case(case_path), engine)
+        deck = render_case(case, case_path.parent, output)
+    except CaseError as error:
+        _fail(str(error))
+    console.print(f"deck written: {deck}")
+
+
+@main.command()
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
+@click.option("--timeout", type=float, default=None, help="Stop the engine after this many seconds.")
+def run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
+    """Run CASE_PATH and collect results.h5 and run.json."""
+    _run(case_path, engine, output, timeout)
+
+
+@main.command()
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Engine (default: the case's, LIGGGHTS).")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Run directory.")
+def demo(engine: str | None, output: Path | None) -> None:
+    """Run the bundled demo case and print its metrics."""
+    _run(DEMO_CASE, engine, output, None)
+
+
+@main.command()
+@click.argument("rundir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the metrics as JSON.")
+def post(rundir: Path, as_json: bool) -> None:
+    """Print summary metrics of a finished run directory."""
+    path = rundir / RESULTS
+    if not path.exists():
+        record = rundir / "run.json"
+        status = json.loads(record.read_text()).get("status", "unknown") if record.exists() else "unknown"
+        _fail(f"{rundir} has no {RESULTS} (run status: {status})")
+    trajectory = read_results(path)
+    values = metrics.summary(trajectory)
+    if as_json:
+        console.print_json(json.dumps(values))
+    else:
+        console.print(metrics_table(f"{rundir} ({trajectory.attrs.get('engine', '?')})", values))
+
+
+@main.command()
+def doctor() -> None:
+    """Check engines, the contact-law plugin and the Python side; print what is missing."""
+    table = Table(title="dem-orchestrator doctor", header_style="bold")
+    table.add_column("component")
+    table.add_column("status")
+    table.add_column("details")
+    healthy = True
+    for name in ENGINE_NAMES:
+        info = get_adapter(name).info()
+        if info.executable:
+            table.add_row(name, "[green]ok[/]", f"{info.executable} (version {info.version or 'unknown'})")
+        else:
+            healthy = False
+            table.add_row(name, "[red]missing[/]", f"install: {info.install_hint}")
+    try:
+        from .contact_build import plugin_status
+
+        status = plugin_status()
+        built = bool(status.get("built"))
+        details = str(status.get("path") or "not built yet: run `demorch build-contact`")
+        table.add_row("bilinear contact plugin", "[green]built[/]" if built else "[yellow]not built[/]", details)
+    except ImportError:
+        table.add_row("bilinear contact plugin", "[yellow]unavailable[/]", "this version has no plugin builder")
+    console.print(table)
+    if not healthy:
+        sys.exit(1)
+
+
+@main.command("build-contact")
+@click.option("--force", is_flag=True, help="Rebuild even if a cached build exists.")
+def build_contact(force: bool) -> None:
+    """Build (or find in the cache) the LIGGGHTS bilinear contact-law plugin."""
+    from .contact_build import ContactBuildError, ensure_plugin, plugin_status
+
+    try:
+        path = ensure_plugin(force=force, progress=lambda message: console.print(message))
+    except ContactBuildError as error:
+        _fail(str(error), code=4)
+    console.print(f"plugin: {path}")
+    console.print_json(json.dumps(plugin_status(), default=str))
+
+
+if __name__ == "__main__":
+    main()

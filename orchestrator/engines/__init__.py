@@ -1,0 +1,20 @@
+"""Engine adapters by name."""
+
+from __future__ import annotations
+
+from .base import EngineAdapter, EngineError, EngineInfo
+from .liggghts import LiggghtsAdapter
+from .yade import YadeAdapter
+
+ENGINE_NAMES = ("liggghts", "yade")
+
+
+def get_adapter(name: str) -> EngineAdapter:
+    if name == "liggghts":
+        return LiggghtsAdapter()
+    if name == "yade":
+        return YadeAdapter()
+    raise ValueError(f"unknown engine {name!r}; allowed: {', '.join(ENGINE_NAMES)}")
+
+
+__all__ = ["ENGINE_NAMES", "EngineAdapter", "EngineError", "EngineInfo", "get_adapter"]

@@ -1,0 +1,137 @@
+"""What every engine adapter provides, and the shared way of running an engine process.
+
+An adapter writes its input into a run directory, executes the engine there (log streamed to
+`engine.log`, progress reported as simulated time), and reads the output back as a Trajectory.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import threading
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Protocol
+
+from ..case import Case
+from ..results import Trajectory
+
+LOG_NAME = "engine.log"
+TAIL_LINES = 25
+
+ProgressCallback = Callable[[float, float], None]  # (simulated time, end time)
+
+
+class EngineError(RuntimeError):
+    """An engine failed. The message carries the deck path and the tail of the engine log."""
+
+    def __init__(self, summary: str, deck: Path | None = None, log: Path | None = None, tail: list[str] | None = None):
+        self.summary = summary
+        self.deck = deck
+        self.log = log
+        self.tail = tail or []
+        parts = [summary]
+        if deck is not None:
+            parts.append(f"deck: {deck}")
+        if log is not None:
+            parts.append(f"log:  {log}")
+        if self.tail:
+            parts.append("last lines of the engine log:\n" + "\n".join(f"  | {line}" for line in self.tail))
+        super().__init__("\n".join(parts))
+
+
+@dataclass(frozen=True)
+class EngineInfo:
+    name: str
+    executable: str | None
+    version: str | None
+    install_hint: str
+
+
+class EngineAdapter(Protocol):
+    name: str
+
+    def info(self) -> EngineInfo: ...
+
+    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+        """Render the deck (and its data files) into rundir; return the deck path."""
+        ...
+
+    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None: ...
+
+    def read_output(self, rundir: Path) -> Trajectory: ...
+
+
+def require_executable(name: str, install_hint: str) -> str:
+    path = shutil.which(name)
+    if path is None:
+        raise EngineError(f"the engine executable {name!r} was not found on PATH; install it with: {install_hint}")
+    return path
+
+
+def run_engine(
+    command: list[str],
+    rundir: Path,
+    deck: Path,
+    parse_progress: Callable[[str], float | None],
+    end_time: float,
+    progress: ProgressCallback | None = None,
+    env: dict[str, str] | None = None,
+    timeout: float | None = None,
+    failure_markers: tuple[str, ...] = ("ERROR",),
+) -> list[str]:
+    """Run an engine, streaming its output to engine.log; raise EngineError on any sign of failure.
+
+    Failure: non-zero exit, a line starting with one of `failure_markers`, or a progress value
+    that is not finite. Returns the log tail for callers that check more (lost bodies, say).
+    """
+    log_path = rundir / LOG_NAME
+    tail: deque[str] = deque(maxlen=TAIL_LINES)
+    failure: str | None = None
+    timed_out = threading.Event()
+    with open(log_path, "w", encoding="utf-8") as log:
+        log.write(f"# command: {' '.join(command)}\n")
+        log.flush()
+        try:
+            process = subprocess.Popen(
+                command,
+                cwd=rundir,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                text=True,
+                errors="replace",
+                env=env,
+                bufsize=1,
+            )
+        except OSError as error:
+            raise EngineError(f"could not start {command[0]}: {error.strerror}", deck, log_path) from None
+        assert process.stdout is not None
+        watchdog = threading.Timer(timeout, lambda: (timed_out.set(), process.kill())) if timeout else None
+        if watchdog is not None:
+            watchdog.start()
+        for line in process.stdout:
+            log.write(line)
+            line = line.rstrip("\n")
+            tail.append(line)
+            stripped = line.lstrip()
+            if failure is None and any(stripped.startswith(marker) for marker in failure_markers):
+                failure = stripped
+            simulated = parse_progress(line)
+            if simulated is not None:
+                if not math.isfinite(simulated):
+                    failure = failure or f"non-finite value in engine output: {stripped}"
+                elif progress is not None:
+                    progress(simulated, end_time)
+        returncode = process.wait()
+        if watchdog is not None:
+            watchdog.cancel()
+    if timed_out.is_set():
+        failure = f"timed out after {timeout:.0f} s and was stopped"
+    if failure is None and returncode != 0:
+        failure = f"{Path(command[0]).name} exited with status {returncode}"
+    if failure is not None:
+        raise EngineError(f"engine run failed: {failure}", deck, log_path, list(tail))
+    return list(tail)

@@ -1,0 +1,61 @@
+"""Engine-neutral preparation shared by the adapters: schedule, pair constants, wall triangles, domain."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import geometry, physics
+from ..case import Case, Domain
+
+
+@dataclass(frozen=True)
+class Prepared:
+    schedule: physics.Schedule
+    pairs: list[physics.PairConstants]
+    wall_triangles: list[np.ndarray]
+    domain: Domain
+
+
+def prepare(case: Case, case_dir: Path) -> Prepared:
+    plan = physics.schedule(case)
+    triangles = [geometry.wall_triangles(wall, case_dir) for wall in case.walls]
+    domain = case.domain or geometry.automatic_domain(case, triangles, plan.end_time)
+    return Prepared(schedule=plan, pairs=physics.pair_constants(case), wall_triangles=triangles, domain=domain)
+
+
+def pair_matrices(case: Case, pairs: list[physics.PairConstants]) -> dict[str, list[float]]:
+    """Row-major n×n matrices (n = number of materials) of every pair constant.
+
+    Pairs that can never touch (wall/wall) take the first listed pair's values: an engine
+    wants a full matrix but never uses those entries.
+    """
+    names = [m.name for m in case.materials]
+    by_key = {frozenset(p.materials): p for p in pairs}
+    fallback = pairs[0]
+    matrices: dict[str, list[float]] = {key: [] for key in ("kn", "kt", "mu", "cn", "en2")}
+    for a in names:
+        for b in names:
+            pair = by_key.get(frozenset((a, b)), fallback)
+            for key in matrices:
+                matrices[key].append(float(getattr(pair, key)))
+    return matrices
+
+
+CASE_COPY = "case.json"
+
+
+def save_case(case: Case, rundir: Path) -> None:
+    """Keep the validated case beside the deck: readers take masses, materials and the schedule from it."""
+    (rundir / CASE_COPY).write_text(case.model_dump_json(indent=2) + "\n")
+
+
+def saved_case(rundir: Path) -> Case:
+    return Case.model_validate_json((rundir / CASE_COPY).read_text())
+
+
+def sphere_materials(case: Case) -> np.ndarray:
+    """Material of each body, in body order (both engines number bodies in case order)."""
+    return np.array([s.material for s in case.bodies.spheres])

@@ -1,0 +1,241 @@
+"""LIGGGHTS adapter: data file + deck from the template, `liggghts -in`, text dump → Trajectory."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from .. import geometry, physics
+from ..case import Case
+from ..results import Trajectory
+from . import common
+from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
+
+DECK_NAME = "in.liggghts"
+DATA_NAME = "data.spheres"
+DUMP_NAME = "frames.dump"
+INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
+
+_THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)\s*$")
+_DUMP_COLUMNS = ["id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz"]
+
+
+def _package_version(package: str) -> str | None:
+    try:
+        result = subprocess.run(["dpkg-query", "-W", "-f=${Version}", package], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return result.stdout.strip() or None
+
+
+def id_ranges(ids: list[int]) -> str:
+    """Compress sorted ids into LIGGGHTS group ranges: [1, 2, 3, 7] → '1:3 7'."""
+    parts: list[str] = []
+    start = previous = ids[0]
+    for value in ids[1:] + [None]:  # type: ignore[list-item]
+        if value is not None and value == previous + 1:
+            previous = value
+            continue
+        parts.append(f"{start}:{previous}" if previous > start else str(start))
+        if value is not None:
+            start = previous = value
+    return " ".join(parts)
+
+
+class ThermoWatcher:
+    """Reads thermo lines (step atoms ke): simulated time for progress, and the atom count."""
+
+    def __init__(self, dt: float):
+        self.dt = dt
+        self.first_atoms: int | None = None
+        self.last_atoms: int | None = None
+        self.last_step = 0
+
+    def __call__(self, line: str) -> float | None:
+        match = _THERMO_LINE.match(line)
+        if not match:
+            return None
+        step, atoms, kinetic = int(match.group(1)), int(match.group(2)), match.group(3)
+        self.first_atoms = atoms if self.first_atoms is None else self.first_atoms
+        self.last_atoms, self.last_step = atoms, step
+        try:
+            if not np.isfinite(float(kinetic)):
+                return float("nan")
+        except ValueError:
+            return None
+        return step * self.dt
+
+
+class LiggghtsAdapter:
+    name = "liggghts"
+
+    def __init__(self, executable: str = "liggghts", mpi_processes: int = 1):
+        self.executable = executable
+        self.mpi_processes = mpi_processes
+
+    def info(self) -> EngineInfo:
+        return EngineInfo(
+            name=self.name,
+            executable=shutil.which(self.executable),
+            version=_package_version("liggghts"),
+            install_hint=INSTALL_HINT,
+        )
+
+    # -- input -----------------------------------------------------------------------------
+    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+        from ..render import render
+
+        prepared = common.prepare(case, case_dir)
+        common.save_case(case, rundir)
+        types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
+        mesh_dir = rundir / "meshes"
+        mesh_dir.mkdir(exist_ok=True)
+        walls = []
+        for wall, triangles in zip(case.walls, prepared.wall_triangles):
+            stl = mesh_dir / f"{wall.name}.stl"
+            geometry.write_ascii_stl(stl, triangles)
+            walls.append({"name": wall.name, "stl": f"meshes/{stl.name}", "type": types[wall.material]})
+        self._write_data(case, prepared, types, rundir / DATA_NAME)
+        gravity = np.asarray(case.gravity, dtype=float)
+        magnitude = float(np.linalg.norm(gravity))
+        direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
+        fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation]
+        context = {
+            "name": case.name,
+            "materials": [{"name": name, "type": t} for name, t in types.items()],
+            "n_types": len(types),
+            "matrix": common.pair_matrices(case, prepared.pairs),
+            "law": case.law.value,
+            "data_file": DATA_NAME,
+            "dump_file": DUMP_NAME,
+            "skin": float(max(s.radius for s in case.bodies.spheres)),
+            "dt": prepared.schedule.dt,
+            "gravity_magnitude": magnitude,
+            "gravity_direction": [float(v) for v in direction],
+            "walls": walls,
+            "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
+            "output_every": prepared.schedule.output_every,
+            "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
+            "total_steps": prepared.schedule.total_steps,
+        }
+        deck = rundir / DECK_NAME
+        deck.write_text(render("liggghts", "case.in.j2", context))
+        return deck
+
+    def _write_data(self, case: Case, prepared: "common.Prepared", types: dict[str, int], path: Path) -> None:
+        """LIGGGHTS data file (atom_style granular): Atoms `id type diameter density x y z`, then Velocities."""
+        lower, upper = prepared.domain.lower, prepared.domain.upper
+        lines = [
+            f"LIGGGHTS data file written by dem-orchestrator for case {case.name}",
+            "",
+            f"{len(case.bodies.spheres)} atoms",
+            f"{len(types)} atom types",
+            "",
+            f"{lower[0]!r} {upper[0]!r} xlo xhi",
+            f"{lower[1]!r} {upper[1]!r} ylo yhi",
+            f"{lower[2]!r} {upper[2]!r} zlo zhi",
+            "",
+            "Atoms",
+            "",
+        ]
+        for i, sphere in enumerate(case.bodies.spheres, start=1):
+            density = case.material(sphere.material).density
+            x, y, z = sphere.position
+            lines.append(f"{i} {types[sphere.material]} {2.0 * sphere.radius!r} {density!r} {x!r} {y!r} {z!r}")
+        lines += ["", "Velocities", ""]
+        for i, sphere in enumerate(case.bodies.spheres, start=1):
+            values = " ".join(repr(float(v)) for v in (*sphere.velocity, *sphere.angular_velocity))
+            lines.append(f"{i} {values}")
+        path.write_text("\n".join(lines) + "\n")
+
+    # -- run -------------------------------------------------------------------------------
+    def command(self, deck: Path) -> list[str]:
+        executable = require_executable(self.executable, INSTALL_HINT)
+        base = [executable, "-echo", "none", "-in", deck.name]
+        if self.mpi_processes > 1:
+            mpirun = require_executable("mpirun", "apt-get install -y openmpi-bin")
+            return [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(self.mpi_processes), *base]
+        return base
+
+    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        deck = rundir / DECK_NAME
+        plan = physics.schedule(common.saved_case(rundir))
+        dt, total = plan.dt, plan.total_steps
+        watcher = ThermoWatcher(dt)
+        env = dict(os.environ)
+        if "model bilinear" in deck.read_text():
+            from ..contact_build import ensure_plugin, liggghts_env
+
+            env.update(liggghts_env(ensure_plugin()))
+        tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout)
+        if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
+            lost = watcher.first_atoms - watcher.last_atoms
+            raise EngineError(
+                f"{lost} bodies left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
+                deck,
+                rundir / "engine.log",
+                tail,
+            )
+        if watcher.last_step < total:
+            raise EngineError(f"the run stopped at step {watcher.last_step} of {total}", deck, rundir / "engine.log", tail)
+
+    # -- output ----------------------------------------------------------------------------
+    def read_output(self, rundir: Path) -> Trajectory:
+        deck = rundir / DECK_NAME
+        case = common.saved_case(rundir)
+        dt = physics.schedule(case).dt
+        steps, frames = read_dump(rundir / DUMP_NAME)
+        if not frames:
+            raise EngineError("the engine wrote no dump frames", deck, rundir / "engine.log")
+        first = frames[0]
+        ids = first[:, 0].astype(np.int64)
+        column = {name: i for i, name in enumerate(_DUMP_COLUMNS)}
+        n_frames, n_bodies = len(frames), len(ids)
+        position = np.full((n_frames, n_bodies, 3), np.nan)
+        velocity = np.full_like(position, np.nan)
+        spin = np.full_like(position, np.nan)
+        index_of = {int(i): k for k, i in enumerate(ids)}
+        for f, rows in enumerate(frames):
+            slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
+            position[f, slots] = rows[:, column["x"] : column["z"] + 1]
+            velocity[f, slots] = rows[:, column["vx"] : column["vz"] + 1]
+            spin[f, slots] = rows[:, column["omegax"] : column["omegaz"] + 1]
+        return Trajectory(
+            time=np.asarray(steps, dtype=float) * dt,
+            ids=ids,
+            material=common.sphere_materials(case),
+            mass=first[:, column["mass"]].copy(),
+            radius=first[:, column["radius"]].copy(),
+            position=position,
+            velocity=velocity,
+            angular_velocity=spin,
+            orientation=np.full((n_frames, n_bodies, 4), np.nan),
+            attrs={"orientation_tracked": False},
+        )
+
+
+def read_dump(path: Path) -> tuple[list[int], list[np.ndarray]]:
+    """Parse a `dump custom` text file into (steps, per-frame arrays in the dump's column order)."""
+    if not path.exists():
+        return [], []
+    steps: list[int] = []
+    frames: list[np.ndarray] = []
+    text = path.read_text()
+    for block in text.split("ITEM: TIMESTEP\n")[1:]:
+        parts = block.split("\n", 8)  # 8 header lines, then the rows
+        if len(parts) < 9:
+            break  # a frame cut short by a crash
+        step, count, columns = int(parts[0]), int(parts[2]), parts[7].split()[2:]
+        if columns != _DUMP_COLUMNS:
+            raise ValueError(f"{path}: unexpected dump columns {columns}")
+        data = np.array(parts[8].split(), dtype=float)
+        if data.size != count * len(columns):
+            break  # incomplete last frame
+        steps.append(step)
+        frames.append(data.reshape(count, len(columns)))
+    return steps, frames

@@ -1,0 +1,136 @@
+"""YADE adapter: a Python script from the template, `yade -x -n`, binary frame stream → Trajectory.
+
+The orchestrator never imports yade: Debian's `yade` runs under Debian's python3.11, whatever
+Python the orchestrator uses.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from .. import physics
+from ..case import Case, CaseError, ContactLaw
+from ..results import Trajectory
+from . import common
+from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
+from .yade_materials import yade_materials
+
+SCRIPT_NAME = "script.py"
+FRAMES_NAME = "frames.npy"
+INSTALL_HINT = "apt-get install -y yade python3-yade"
+
+_PROGRESS = re.compile(r"^DEMORCH_PROGRESS (\S+) (\S+)$")
+
+
+def _progress(line: str) -> float | None:
+    match = _PROGRESS.match(line)
+    return float(match.group(1)) if match else None
+
+
+class YadeAdapter:
+    name = "yade"
+
+    def __init__(self, executable: str = "yade", threads: int = 1):
+        self.executable = executable
+        self.threads = threads
+
+    def info(self) -> EngineInfo:
+        path = shutil.which(self.executable)
+        version = None
+        if path:
+            try:
+                out = subprocess.run([path, "--version"], capture_output=True, text=True, timeout=60).stdout
+                match = re.search(r"Yade version:\s*(\S+)", out)
+                version = match.group(1) if match else None
+            except (OSError, subprocess.TimeoutExpired):
+                version = None
+        return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
+
+    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+        from ..render import render
+
+        if case.law is ContactLaw.bilinear:
+            raise CaseError("contacts.law: 'bilinear' is not available on YADE yet; use engine: liggghts or law: linear")
+        prepared = common.prepare(case, case_dir)
+        common.save_case(case, rundir)
+        wall_material = {wall.name: wall.material for wall in case.walls}
+        facets = [
+            (wall_material[wall.name], *[tuple(float(c) for c in vertex) for vertex in triangle])
+            for wall, triangles in zip(case.walls, prepared.wall_triangles)
+            for triangle in triangles
+        ]
+        spheres = [
+            (s.material, s.radius, s.position, s.velocity, s.angular_velocity, s.fixed_rotation) for s in case.bodies.spheres
+        ]
+        touching = case.touching_pairs()
+        friction = [(p.materials[0], p.materials[1], p.mu) for p in prepared.pairs if frozenset(p.materials) in touching]
+        context = {
+            "name": case.name,
+            "seed": case.seed,
+            "dt": prepared.schedule.dt,
+            "total_steps": prepared.schedule.total_steps,
+            "output_every": prepared.schedule.output_every,
+            "gravity": tuple(float(g) for g in case.gravity),
+            "frames_file": FRAMES_NAME,
+            "yade_materials": yade_materials(case, prepared.pairs),
+            "friction": friction,
+            "spheres": spheres,
+            "facets": facets,
+        }
+        script = rundir / SCRIPT_NAME
+        script.write_text(render("yade", "case.py.j2", context))
+        return script
+
+    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        script = rundir / SCRIPT_NAME
+        executable = require_executable(self.executable, INSTALL_HINT)
+        end_time = physics.schedule(common.saved_case(rundir)).end_time
+        command = [executable, f"-j{self.threads}", "-x", "-n", SCRIPT_NAME]
+        tail = run_engine(
+            command, rundir, script, _progress, end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback")
+        )
+        if not any(line.startswith("DEMORCH_DONE") for line in tail):
+            raise EngineError("YADE ended without finishing the script", script, rundir / "engine.log", tail)
+
+    def read_output(self, rundir: Path) -> Trajectory:
+        times, rows = read_frames(rundir / FRAMES_NAME)
+        script = rundir / SCRIPT_NAME
+        if not rows:
+            raise EngineError("YADE wrote no frames", script, rundir / "engine.log")
+        first = rows[0]
+        stack = np.stack(rows)
+        return Trajectory(
+            time=np.asarray(times),
+            ids=first[:, 0].astype(np.int64),
+            material=common.sphere_materials(common.saved_case(rundir)),
+            mass=first[:, 1].copy(),
+            radius=first[:, 2].copy(),
+            position=stack[:, :, 3:6],
+            velocity=stack[:, :, 6:9],
+            angular_velocity=stack[:, :, 9:12],
+            orientation=stack[:, :, 12:16],
+            attrs={"orientation_tracked": True},
+        )
+
+
+def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
+    """Read the (time, rows) pairs the script appended with numpy.save; a cut-off tail is dropped."""
+    times: list[float] = []
+    rows: list[np.ndarray] = []
+    if not path.exists():
+        return times, rows
+    with open(path, "rb") as stream:
+        while True:
+            try:
+                time = np.load(stream, allow_pickle=False)
+                state = np.load(stream, allow_pickle=False)
+            except (EOFError, ValueError, OSError):
+                break
+            times.append(float(time[0]))
+            rows.append(state)
+    return times, rows

@@ -1,0 +1,90 @@
+"""Per-material constants for YADE's ViscElMat from the case's per-pair constants.
+
+YADE gives every body one material and combines two materials' stiffness and damping in series,
+1/k = 1/k_a + 1/k_b, treating a zero as absent (k = k_b when k_a = 0). So for each quantity we
+solve for per-material values that reproduce every touching pair: a body material gets twice its
+self-pair value, a wall material what is left for each body/wall pair. A combination the series
+rule cannot express is a case error, reported before YADE starts.
+"""
+
+from __future__ import annotations
+
+from ..case import Case, CaseError
+from ..physics import PairConstants
+
+RELATIVE_TOLERANCE = 1e-9
+
+
+def series(a: float, b: float) -> float:
+    """YADE's contactParameterCalculation: series combination where 0 means 'absent'."""
+    inverse = (1.0 / a if a else 0.0) + (1.0 / b if b else 0.0)
+    return 1.0 / inverse if inverse else 0.0
+
+
+def _close(a: float, b: float) -> bool:
+    return abs(a - b) <= RELATIVE_TOLERANCE * max(abs(a), abs(b), 1e-300)
+
+
+def split_in_series(case: Case, pairs: list[PairConstants], quantity: str) -> dict[str, float]:
+    """Per-material values of `quantity` (kn, kt or cn) whose series combinations give the pair values."""
+    value = {frozenset(p.materials): float(getattr(p, quantity)) for p in pairs}
+    bodies = case.body_materials()
+    walls = sorted({w.material for w in case.walls} - set(bodies))
+    per_material = {name: 2.0 * value[frozenset((name,))] for name in bodies}
+    for name in walls:
+        for body in bodies:
+            target = value.get(frozenset((body, name)))
+            if target is None:
+                continue
+            if not target:
+                candidate = 0.0
+            elif not per_material[body]:
+                candidate = target
+            else:
+                remainder = 1.0 / target - 1.0 / per_material[body]
+                candidate = 0.0 if abs(remainder) * target <= RELATIVE_TOLERANCE else (1.0 / remainder if remainder > 0 else -1.0)
+            if candidate < 0:
+                raise CaseError(
+                    f"contacts ({body}/{name}).{_field(quantity)}: YADE combines per-material values in series, so a "
+                    f"body/wall value may not exceed twice the body's self-pair value "
+                    f"({target!r} > {per_material[body]!r}); allowed range: (0, {per_material[body]!r}]"
+                )
+            per_material.setdefault(name, candidate)
+    for pair, target in value.items():
+        names = sorted(pair) * (2 if len(pair) == 1 else 1)
+        if any(n not in per_material for n in names):
+            continue  # wall/wall: never touch
+        got = series(per_material[names[0]], per_material[names[1]])
+        if not _close(got, target):
+            raise CaseError(
+                f"contacts ({'/'.join(names)}).{_field(quantity)}: YADE combines per-material values in series; "
+                f"with the other pairs this pair would get {got!r}, not {target!r}. Make the pair values consistent "
+                f"(k_ab = k_a k_b / (k_a + k_b) with k_a = 2 k_aa) or run this case on LIGGGHTS"
+            )
+    return per_material
+
+
+def _field(quantity: str) -> str:
+    return {"kn": "kn", "kt": "kt_over_kn", "cn": "en2"}[quantity]
+
+
+def yade_materials(case: Case, pairs: list[PairConstants]) -> list[dict[str, object]]:
+    """ViscElMat arguments per material, in case order (YADE material id = index)."""
+    stiffness = split_in_series(case, pairs, "kn")
+    shear = split_in_series(case, pairs, "kt")
+    damping = split_in_series(case, pairs, "cn")
+    mu = {frozenset(p.materials): p.mu for p in pairs}
+    result = []
+    for material in case.materials:
+        self_mu = mu.get(frozenset((material.name,)), max(mu.values()))
+        result.append(
+            {
+                "name": material.name,
+                "density": material.density,
+                "kn": stiffness.get(material.name, 0.0),
+                "ks": shear.get(material.name, 0.0),
+                "cn": damping.get(material.name, 0.0),
+                "mu": self_mu,
+            }
+        )
+    return result

@@ -1,0 +1,141 @@
+"""Engine-neutral derived quantities: body masses, per-pair contact constants, the time step.
+
+Both engines receive the same numbers from here, so a case behaves the same whichever runs it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .case import Case, ContactLaw, Sphere
+
+
+def sphere_mass(sphere: Sphere, density: float) -> float:
+    return density * 4.0 / 3.0 * math.pi * sphere.radius**3
+
+
+def reference_masses(case: Case) -> dict[str, float]:
+    """Mean body mass per body material: the mass the linear law's damping is tuned for."""
+    totals: dict[str, list[float]] = {}
+    for sphere in case.bodies.spheres:
+        density = case.material(sphere.material).density
+        totals.setdefault(sphere.material, []).append(sphere_mass(sphere, density))
+    return {name: sum(masses) / len(masses) for name, masses in totals.items()}
+
+
+def smallest_masses(case: Case) -> dict[str, float]:
+    """Lightest body per body material: it sets the shortest contact duration."""
+    smallest: dict[str, float] = {}
+    for sphere in case.bodies.spheres:
+        mass = sphere_mass(sphere, case.material(sphere.material).density)
+        smallest[sphere.material] = min(mass, smallest.get(sphere.material, math.inf))
+    return smallest
+
+
+def effective_mass(mass_a: float | None, mass_b: float | None) -> float:
+    """Reduced mass of a pair; None stands for a wall (infinite mass)."""
+    if mass_a is None and mass_b is None:
+        raise ValueError("a wall/wall pair has no effective mass")
+    if mass_a is None:
+        return float(mass_b)  # type: ignore[arg-type]
+    if mass_b is None:
+        return mass_a
+    return mass_a * mass_b / (mass_a + mass_b)
+
+
+def linear_damping(kn: float, en2: float, mass: float) -> float:
+    """Viscous coefficient c_n of a linear spring-dashpot giving restitution e_n for reduced mass m.
+
+    From the damped oscillator: e = exp(-π ζ / sqrt(1 - ζ²)), so c_n = 2 |ln e| sqrt(k m) / sqrt(π² + ln² e).
+    """
+    log_e = 0.5 * math.log(en2)
+    return 2.0 * abs(log_e) * math.sqrt(kn * mass) / math.sqrt(math.pi**2 + log_e**2)
+
+
+@dataclass(frozen=True)
+class PairConstants:
+    """What an engine needs for one material pair, in SI units."""
+
+    materials: tuple[str, str]
+    law: ContactLaw
+    kn: float
+    kt: float
+    en2: float
+    mu: float
+    cn: float  # normal viscous coefficient (linear law only; 0 for bilinear)
+    reference_mass: float
+
+
+def pair_constants(case: Case) -> list[PairConstants]:
+    """Constants for every pair listed in the case (wall/wall pairs get no damping: they never touch)."""
+    masses = reference_masses(case)
+    constants = []
+    for pair in case.contacts:
+        a, b = pair.materials
+        mass_a, mass_b = masses.get(a), masses.get(b)
+        if mass_a is None and mass_b is None:
+            reference = 0.0
+        else:
+            reference = effective_mass(mass_a, mass_b)
+        cn = linear_damping(pair.kn, pair.en2, reference) if pair.law is ContactLaw.linear and reference > 0 else 0.0
+        constants.append(
+            PairConstants(
+                materials=(a, b),
+                law=pair.law,
+                kn=pair.kn,
+                kt=pair.kt_over_kn * pair.kn,
+                en2=pair.en2,
+                mu=pair.mu,
+                cn=cn,
+                reference_mass=reference,
+            )
+        )
+    return constants
+
+
+def contact_duration(kn: float, mass: float) -> float:
+    """Undamped contact duration π sqrt(m/k): an upper bound on the stiffest phase of either law."""
+    return math.pi * math.sqrt(mass / kn)
+
+
+def time_step(case: Case) -> float:
+    """The case's Δt: given, or safety_factor × the shortest contact duration over touching pairs.
+
+    The shortest duration uses the lightest body of each material and the loading stiffness k_n
+    (for the bilinear law the unloading branch is softer, hence slower). A safety factor of 0.02
+    resolves one contact with 50 steps, the usual DEM practice for explicit integration.
+    """
+    if case.time.step != "auto":
+        return float(case.time.step)
+    smallest = smallest_masses(case)
+    durations = []
+    for pair in case.contacts:
+        if pair.key not in case.touching_pairs():
+            continue
+        a, b = pair.materials
+        mass = effective_mass(smallest.get(a), smallest.get(b))
+        durations.append(contact_duration(pair.kn, mass))
+    return case.time.safety_factor * min(durations)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Integer step counts the engines run with; the duration is rounded up to whole output intervals."""
+
+    dt: float
+    output_every: int
+    frames: int
+    total_steps: int
+
+    @property
+    def end_time(self) -> float:
+        return self.total_steps * self.dt
+
+
+def schedule(case: Case) -> Schedule:
+    dt = time_step(case)
+    output_every = max(1, round(case.time.output_interval / dt))
+    frames = math.ceil(case.time.duration / (output_every * dt) - 1e-9)
+    return Schedule(dt=dt, output_every=output_every, frames=frames, total_steps=frames * output_every)
+
