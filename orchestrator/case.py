@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, Union, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -55,10 +55,18 @@ class Engine(str, Enum):
 class TimeSettings(Strict):
     """Time integration. `step: auto` derives Δt from the stiffest contact and the lightest body."""
 
-    step: Union[Literal["auto"], Real(gt=0.0, le=1e-2)] = "auto"
+    step: Union[Literal["auto"], float] = "auto"
     safety_factor: Real(gt=0.0, le=0.5) = 0.02
     duration: Real(gt=0.0, le=1e4)
     output_interval: Real(gt=0.0, le=1e4)
+
+    @field_validator("step", mode="before")
+    def _step_auto_or_range(cls, value: object) -> object:
+        if value == "auto":
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value <= 1e-2:
+            raise ValueError("must be 'auto' or a number of seconds; allowed range: (0, 0.01]")
+        return float(value)
 
 
 class Material(Strict):
@@ -227,16 +235,62 @@ class Case(Strict):
         return next(p for p in self.contacts if p.key == key)
 
 
+_BOUND_ERRORS = {"greater_than", "greater_than_equal", "less_than", "less_than_equal"}
+
+
+def _allowed_range(location: tuple[object, ...]) -> str | None:
+    """'(0, 1e12]'-style range of the numeric field at `location`, from its Field constraints."""
+    annotation: object = Case
+    info = None
+    for part in location:
+        while get_origin(annotation) in (list, tuple, Union) or str(get_origin(annotation)) == "typing.Annotated":
+            if get_origin(annotation) in (list, tuple):
+                annotation = get_args(annotation)[0]
+            elif get_origin(annotation) is Union:
+                annotation = next((a for a in get_args(annotation) if isinstance(a, type) and issubclass(a, BaseModel)), annotation)
+                break
+            else:
+                annotation = get_args(annotation)[0]
+        if isinstance(part, int):
+            continue
+        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)) or part not in annotation.model_fields:
+            return None
+        info = annotation.model_fields[part]
+        annotation = info.annotation
+    if info is None:
+        return None
+    low = high = None
+    low_open = high_open = True
+    for constraint in info.metadata:
+        for name, closed in (("gt", False), ("ge", True)):
+            if getattr(constraint, name, None) is not None:
+                low, low_open = getattr(constraint, name), not closed
+        for name, closed in (("lt", False), ("le", True)):
+            if getattr(constraint, name, None) is not None:
+                high, high_open = getattr(constraint, name), not closed
+    if low is None and high is None:
+        return None
+    left = "(" if low_open or low is None else "["
+    right = ")" if high_open or high is None else "]"
+    return f"{left}{'-inf' if low is None else low:.10g}, {'inf' if high is None else high:.10g}{right}"
+
+
 def _format_error(error: ValidationError) -> str:
-    """One line per problem: `field.path: message (got value)`."""
+    """One line: `field.path: message (got value)` for each problem, joined by '; '."""
     lines = []
     for item in error.errors():
-        location = ".".join(str(part) for part in item["loc"]) or "case"
+        location = tuple(part for part in item["loc"] if isinstance(part, int) or ("[" not in part and "(" not in part))
         message = item["msg"].removeprefix("Value error, ")
-        shown = repr(item.get("input"))
-        if len(shown) > 60:
-            shown = shown[:57] + "..."
-        lines.append(f"{location}: {message} (got {shown})")
+        if item["type"] == "string_pattern_mismatch":
+            message = "must start with a letter and hold only letters, digits and '_' (1 to 40 characters)"
+        if item["type"] in _BOUND_ERRORS:
+            allowed = _allowed_range(location)
+            message = f"{message}; allowed range: {allowed}" if allowed else message
+        text = f"{'.'.join(str(p) for p in location)}: {message}" if location else message
+        if location and item["type"] != "missing":
+            shown = repr(item.get("input"))
+            text += f" (got {shown[:57] + '...' if len(shown) > 60 else shown})"
+        lines.append(text)
     return "; ".join(lines)
 
 

@@ -59,3 +59,8 @@ def saved_case(rundir: Path) -> Case:
 def sphere_materials(case: Case) -> np.ndarray:
     """Material of each body, in body order (both engines number bodies in case order)."""
     return np.array([s.material for s in case.bodies.spheres])
+
+
+def sphere_masses(case: Case) -> np.ndarray:
+    """Exact body masses from the case (dumps print fewer digits than the engines compute with)."""
+    return np.array([physics.sphere_mass(s, case.material(s.material).density) for s in case.bodies.spheres])

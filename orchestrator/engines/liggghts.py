@@ -156,7 +156,7 @@ class LiggghtsAdapter:
     # -- run -------------------------------------------------------------------------------
     def command(self, deck: Path) -> list[str]:
         executable = require_executable(self.executable, INSTALL_HINT)
-        base = [executable, "-echo", "none", "-in", deck.name]
+        base = [executable, "-echo", "screen", "-in", deck.name]  # echo: the log shows the failing command
         if self.mpi_processes > 1:
             mpirun = require_executable("mpirun", "apt-get install -y openmpi-bin")
             return [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(self.mpi_processes), *base]
@@ -209,8 +209,8 @@ class LiggghtsAdapter:
             time=np.asarray(steps, dtype=float) * dt,
             ids=ids,
             material=common.sphere_materials(case),
-            mass=first[:, column["mass"]].copy(),
-            radius=first[:, column["radius"]].copy(),
+            mass=common.sphere_masses(case),
+            radius=np.array([s.radius for s in case.bodies.spheres]),
             position=position,
             velocity=velocity,
             angular_velocity=spin,

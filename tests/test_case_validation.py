@@ -1,0 +1,53 @@
+"""Malformed case files: each gives one line naming the field, and no engine process starts."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from orchestrator.case import CaseError, load_case
+from orchestrator.cli import main
+
+BAD_CASES = sorted((Path(__file__).parent / "cases" / "bad").glob("*.yaml"))
+
+
+def expected_field(path: Path) -> str:
+    """The first line of each bad case says which field the error must name: `# expect: FIELD`."""
+    first = path.read_text().splitlines()[0]
+    assert first.startswith("# expect: "), f"{path.name} lacks its '# expect:' line"
+    return first.removeprefix("# expect: ").strip()
+
+
+def test_there_are_at_least_fifteen_malformed_cases() -> None:
+    assert len(BAD_CASES) >= 15
+
+
+@pytest.mark.parametrize("path", BAD_CASES, ids=lambda p: p.stem)
+def test_bad_case_names_its_field_on_one_line(path: Path) -> None:
+    with pytest.raises(CaseError) as caught:
+        load_case(path)
+    message = str(caught.value)
+    assert "\n" not in message, message
+    assert message.startswith(str(path))
+    assert expected_field(path) in message, message
+
+
+@pytest.mark.parametrize("path", BAD_CASES, ids=lambda p: p.stem)
+def test_cli_rejects_bad_case_before_any_engine_starts(path: Path, tmp_path: Path, no_engine_process: None) -> None:
+    result = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "run")])
+    assert result.exit_code == 2, result.output
+    assert expected_field(path) in " ".join(result.output.split())
+    assert not (tmp_path / "run").exists(), "nothing may be written for an invalid case"
+
+
+def test_bound_errors_state_the_allowed_range(tmp_path: Path) -> None:
+    with pytest.raises(CaseError, match=r"contacts\.0\.en2: .*allowed range: \(0, 1\] \(got 1\.5\)"):
+        load_case(Path(__file__).parent / "cases" / "bad" / "restitution_above_one.yaml")
+
+
+def test_good_case_files_load() -> None:
+    for path in sorted((Path(__file__).parent.parent / "cases").glob("*.yaml")):
+        case = load_case(path)
+        assert case.bodies.spheres, path

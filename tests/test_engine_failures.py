@@ -1,0 +1,66 @@
+"""An engine that fails leaves its deck and log in place and raises an error with the log tail."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from orchestrator.engines import EngineError
+from orchestrator.engines.liggghts import LiggghtsAdapter
+from orchestrator.engines.yade import YadeAdapter
+from orchestrator.runner import RUN_RECORD, render_case, run_case
+
+from conftest import free_fall_case, requires_liggghts, requires_yade
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
+    rundir = tmp_path / "run"
+    deck = render_case(free_fall_case("liggghts"), tmp_path, rundir)
+    deck.write_text(deck.read_text().replace("pair_style      gran", "pair_style      grann"))
+    with pytest.raises(EngineError) as caught:
+        LiggghtsAdapter().execute(rundir)
+    message = str(caught.value)
+    assert "ERROR" in message and "grann" in message, message
+    assert str(deck) in message
+    assert deck.exists() and (rundir / "engine.log").exists()
+    assert "grann" in (rundir / "engine.log").read_text()
+
+
+@requires_yade
+@pytest.mark.engine
+def test_failing_yade_script_reports_traceback(tmp_path: Path) -> None:
+    rundir = tmp_path / "run"
+    script = render_case(free_fall_case("yade"), tmp_path, rundir)
+    script.write_text(script.read_text().replace("O.dt = DT", "O.dt = DT / undefined_name"))
+    with pytest.raises(EngineError) as caught:
+        YadeAdapter().execute(rundir)
+    assert "undefined_name" in str(caught.value)
+    assert script.exists() and (rundir / "engine.log").exists()
+
+
+def test_missing_engine_binary_is_a_clear_error_and_the_run_is_recorded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from orchestrator import runner
+
+    monkeypatch.setattr(runner, "get_adapter", lambda name: LiggghtsAdapter(executable="liggghts-not-installed"))
+    rundir = tmp_path / "run"
+    with pytest.raises(EngineError, match=r"'liggghts-not-installed' was not found on PATH; install it with: apt-get"):
+        run_case(free_fall_case("liggghts"), tmp_path, rundir)
+    record = json.loads((rundir / RUN_RECORD).read_text())
+    assert record["status"] == "failed"
+    assert (rundir / "in.liggghts").exists(), "the deck must survive a failed run"
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_bodies_leaving_the_domain_are_reported(tmp_path: Path) -> None:
+    case = free_fall_case("liggghts")
+    data = case.model_dump(mode="json")
+    data["domain"] = {"lower": [-0.1, -0.1, 0.99], "upper": [0.1, 0.1, 1.1]}  # the sphere falls out
+    from orchestrator.case import parse_case
+
+    with pytest.raises(EngineError, match=r"1 bodies left the simulation domain"):
+        run_case(parse_case(data), tmp_path, tmp_path / "run")

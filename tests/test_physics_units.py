@@ -1,0 +1,42 @@
+"""Pure functions of physics.py, checked against independent integrations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from orchestrator.physics import contact_duration, linear_damping, schedule
+
+from conftest import sliding_case
+
+
+@pytest.mark.parametrize("en2", [0.13, 0.53, 0.9])
+def test_linear_damping_gives_the_requested_restitution(en2: float) -> None:
+    """Integrate m x'' = -k x - c x' through one impact (force clipped at zero, as both engines do)."""
+    mass, kn = 0.01, 1e5
+    cn = linear_damping(kn, en2, mass)
+
+    def rhs(_t: float, y: np.ndarray) -> list[float]:
+        overlap, rate = y
+        force = max(kn * overlap + cn * rate, 0.0)
+        return [rate, -force / mass]
+
+    leaves = lambda _t, y: y[0] + 1e-15  # noqa: E731 - overlap back to zero
+    leaves.terminal, leaves.direction = True, -1
+    solution = solve_ivp(rhs, (0, 1.0), [0.0, 1.0], events=leaves, rtol=1e-10, atol=1e-14, max_step=1e-5)
+    rebound = -solution.y_events[0][0][1]
+    # The ODE solver's event location is the only error left: 1e-6 relative is far above it.
+    assert rebound**2 == pytest.approx(en2, rel=1e-6)
+
+
+def test_auto_time_step_is_a_fiftieth_of_the_contact_duration() -> None:
+    case = sliding_case("liggghts")
+    mass = 2500.0 * 4 / 3 * math.pi * 0.005**3
+    plan = schedule(case)
+    # The sphere/sphere pair (reduced mass m/2) is the shortest contact, though only one sphere exists.
+    assert plan.dt == pytest.approx(0.02 * contact_duration(1e5, mass / 2))
+    assert plan.total_steps == plan.frames * plan.output_every
+    assert plan.end_time >= case.time.duration

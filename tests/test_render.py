@@ -1,0 +1,96 @@
+"""Rendering: numbers exact, YADE values only as Python literals, decks deterministic."""
+
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import jinja2
+import pytest
+
+from orchestrator.case import CaseError, parse_case
+from orchestrator.engines.yade_materials import series, split_in_series
+from orchestrator.physics import pair_constants
+from orchestrator.render import environment, py_literal
+from orchestrator.runner import render_case, with_engine
+
+from conftest import sliding_case
+
+
+@pytest.mark.parametrize("value", [0.1, 1e-17, 123456.789, -2.5e300, 0, 7, "it's \"quoted\"\nnewline", ("a", 1.5), [1, [2, 3]], {"k": None, "b": True}])
+def test_py_literal_round_trips(value: object) -> None:
+    assert ast.literal_eval(py_literal(value)) == (list(value) if isinstance(value, list) else value)
+
+
+def test_py_literal_refuses_non_finite_numbers() -> None:
+    with pytest.raises(ValueError):
+        py_literal(math.nan)
+
+
+def test_yade_template_cannot_emit_a_raw_string() -> None:
+    template = environment("yade").from_string("x = {{ value }}")
+    with pytest.raises(jinja2.TemplateError, match=r"\|py"):
+        template.render(value="__import__('os').system('true')")
+    assert template.render(value=py_literal("a'b")) == "x = \"a'b\""
+
+
+def test_liggghts_template_refuses_unsafe_text() -> None:
+    template = environment("liggghts").from_string("fix {{ value }}")
+    with pytest.raises(jinja2.TemplateError):
+        template.render(value="a\nshell rm -rf /")
+
+
+@pytest.mark.parametrize("engine", ["liggghts", "yade"])
+def test_render_is_deterministic_and_exact(engine: str, tmp_path: Path) -> None:
+    case = sliding_case(engine)
+    first = render_case(case, tmp_path, tmp_path / "a").read_text()
+    second = render_case(case, tmp_path, tmp_path / "b").read_text()
+    assert first == second
+    # LIGGGHTS takes the pair value; YADE twice it per material (series combination of two equal halves).
+    assert ("kn peratomtypepair 2 100000.0 " in first) if engine == "liggghts" else ("'kn': 200000.0" in first)
+
+
+def test_yade_script_is_valid_python_holding_the_case_values(tmp_path: Path) -> None:
+    case = sliding_case("yade")
+    script = render_case(case, tmp_path, tmp_path / "run").read_text()
+    tree = ast.parse(script)
+    constants = {
+        node.targets[0].id: ast.literal_eval(node.value)
+        for node in tree.body
+        if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name) and node.targets[0].id.isupper()
+        and isinstance(node.value, (ast.Constant, ast.List, ast.Tuple, ast.Dict, ast.UnaryOp))
+    }
+    assert constants["SPHERES"][0][1] == case.bodies.spheres[0].radius
+    assert constants["FRICTION"][0][2] == pytest.approx(0.2)
+
+
+def test_yade_series_split_reproduces_every_pair() -> None:
+    case = parse_case(
+        {
+            "name": "pairs",
+            "time": {"duration": 0.1, "output_interval": 0.01},
+            "materials": [{"name": "brick", "density": 1700.0}, {"name": "board", "density": 1000.0}],
+            "contacts": [
+                {"materials": ["brick", "brick"], "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27},
+                {"materials": ["brick", "board"], "en2": 0.53, "mu": 0.46, "kn": 1.5e5, "kt_over_kn": 0.3},
+            ],
+            "bodies": {"spheres": [{"material": "brick", "radius": 0.005, "position": [0, 0, 0.1]}]},
+            "walls": [{"type": "rectangle", "name": "floor", "material": "board", "origin": [-1, -1, 0], "edge1": [2, 0, 0], "edge2": [0, 2, 0]}],
+        }
+    )
+    pairs = pair_constants(case)
+    for quantity in ("kn", "kt", "cn"):
+        per_material = split_in_series(case, pairs, quantity)
+        for pair in pairs:
+            a, b = pair.materials
+            assert series(per_material[a], per_material[b]) == pytest.approx(getattr(pair, quantity), rel=1e-12)
+
+
+def test_yade_series_split_reports_impossible_pairs() -> None:
+    case = with_engine(sliding_case("yade"), "yade")
+    data = case.model_dump(mode="json")
+    data["contacts"][1]["kn"] = 5e5  # ball/board stiffer than twice ball/ball: not a series combination
+    bad = parse_case(data)
+    with pytest.raises(CaseError, match=r"kn: YADE combines per-material values in series"):
+        split_in_series(bad, pair_constants(bad), "kn")
