@@ -88,8 +88,12 @@ class PairConstants:
     reference_mass: float
 
 
-def pair_constants(case: Case) -> list[PairConstants]:
-    """Constants for every pair listed in the case (wall/wall pairs get no damping: they never touch)."""
+def pair_constants(case: Case, dashpot_for_bilinear: bool = False) -> list[PairConstants]:
+    """Constants for every pair listed in the case (wall/wall pairs get no damping: they never touch).
+
+    `dashpot_for_bilinear`: an engine without the bilinear law (YADE) emulates it with the linear
+    spring-dashpot of the same loading stiffness, damped to the same restitution.
+    """
     masses = reference_masses(case)
     constants = []
     for pair in case.contacts:
@@ -99,7 +103,8 @@ def pair_constants(case: Case) -> list[PairConstants]:
             reference = 0.0
         else:
             reference = effective_mass(mass_a, mass_b)
-        cn = linear_damping(pair.kn, pair.en2, reference) if pair.law is ContactLaw.linear and reference > 0 else 0.0
+        damped = pair.law is ContactLaw.linear or dashpot_for_bilinear
+        cn = linear_damping(pair.kn, pair.en2, reference) if damped and reference > 0 else 0.0
         constants.append(
             PairConstants(
                 materials=(a, b),

@@ -19,11 +19,11 @@ class Prepared:
     domain: Domain
 
 
-def prepare(case: Case, case_dir: Path) -> Prepared:
+def prepare(case: Case, case_dir: Path, dashpot_for_bilinear: bool = False) -> Prepared:
     plan = physics.schedule(case)
     triangles = [geometry.wall_triangles(wall, case_dir) for wall in case.walls]
     domain = case.domain or geometry.automatic_domain(case, triangles, plan.end_time)
-    return Prepared(schedule=plan, pairs=physics.pair_constants(case), wall_triangles=triangles, domain=domain)
+    return Prepared(schedule=plan, pairs=physics.pair_constants(case, dashpot_for_bilinear), wall_triangles=triangles, domain=domain)
 
 
 def pair_matrices(case: Case, pairs: list[physics.PairConstants]) -> dict[str, list[float]]:
