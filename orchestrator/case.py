@@ -14,6 +14,8 @@ from typing import Annotated, Literal, Union, get_args, get_origin
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .bricks import BrickClump
+
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
 # inert there and makes quotes, spaces and newlines a validation error rather than an injection.
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]{0,39}$"
@@ -107,8 +109,48 @@ class Sphere(Strict):
     fixed_rotation: bool = False
 
 
+class BrickShape(Strict):
+    """A brick (box) made of a clump of layout[0] × layout[1] × layout[2] spheres (see bricks.py)."""
+
+    name: Name
+    length: Real(gt=0.0, le=10.0)
+    width: Real(gt=0.0, le=10.0)
+    thickness: Real(gt=0.0, le=10.0)
+    layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
+
+    def clump(self, density: float) -> BrickClump:
+        return BrickClump(self.length, self.width, self.thickness, density, self.layout)
+
+
+class Clump(Strict):
+    """A rigid clump of spheres with the shape's true mass and inertia."""
+
+    shape: Name
+    material: Name
+    position: Vec3
+    orientation: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    angular_velocity: Vec3 = (0.0, 0.0, 0.0)
+
+    @field_validator("orientation")
+    def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        norm = math.sqrt(sum(v * v for v in value))
+        if norm < 1e-9:
+            raise ValueError("must be a non-zero quaternion (w, x, y, z)")
+        return tuple(v / norm for v in value)  # type: ignore[return-value]
+
+
 class Bodies(Strict):
-    spheres: Annotated[list[Sphere], Field(min_length=1, max_length=2_000_000)]
+    """Spheres (ids first, in order) then clumps (in order): body i in results.h5 is the i-th here."""
+
+    spheres: Annotated[list[Sphere], Field(max_length=2_000_000)] = []
+    clumps: Annotated[list[Clump], Field(max_length=200_000)] = []
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> "Bodies":
+        if not self.spheres and not self.clumps:
+            raise ValueError("give at least one body (spheres or clumps)")
+        return self
 
 
 class RectangleWall(Strict):
@@ -173,6 +215,7 @@ class Case(Strict):
     gravity: Vec3 = (0.0, 0.0, -9.81)
     materials: Annotated[list[Material], Field(min_length=1, max_length=32)]
     contacts: Annotated[list[ContactPair], Field(min_length=1)]
+    shapes: list[BrickShape] = []
     bodies: Bodies
     walls: list[Wall] = []
     domain: Domain | None = None
@@ -196,6 +239,12 @@ class Case(Strict):
         for i, sphere in enumerate(self.bodies.spheres):
             if sphere.material not in known:
                 raise ValueError(f"bodies.spheres.{i}.material: unknown material {sphere.material!r}; known: {sorted(known)}")
+        shapes = {shape.name for shape in self.shapes}
+        for i, clump in enumerate(self.bodies.clumps):
+            if clump.material not in known:
+                raise ValueError(f"bodies.clumps.{i}.material: unknown material {clump.material!r}; known: {sorted(known)}")
+            if clump.shape not in shapes:
+                raise ValueError(f"bodies.clumps.{i}.shape: unknown shape {clump.shape!r}; known: {sorted(shapes)}")
         for i, wall in enumerate(self.walls):
             if wall.material not in known:
                 raise ValueError(f"walls.{i}.material: unknown material {wall.material!r}; known: {sorted(known)}")
@@ -212,7 +261,7 @@ class Case(Strict):
 
     def body_materials(self) -> list[str]:
         """Materials that bodies are made of, in the order of `materials`."""
-        used = {s.material for s in self.bodies.spheres}
+        used = {s.material for s in self.bodies.spheres} | {c.material for c in self.bodies.clumps}
         return [m.name for m in self.materials if m.name in used]
 
     def touching_pairs(self) -> set[frozenset[str]]:
@@ -226,6 +275,9 @@ class Case(Strict):
     @property
     def law(self) -> ContactLaw:
         return self.contacts[0].law
+
+    def shape(self, name: str) -> BrickShape:
+        return next(s for s in self.shapes if s.name == name)
 
     def material(self, name: str) -> Material:
         return next(m for m in self.materials if m.name == name)

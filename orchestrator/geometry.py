@@ -10,6 +10,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from . import physics
 from .case import Case, CaseError, Domain, MeshWall, RectangleWall, Wall
 
 
@@ -55,8 +56,9 @@ def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -
     distance over the run (capped at twice the extent) so a case without a floor keeps its bodies.
     A case can always give `domain:` explicitly.
     """
-    centres = np.array([s.position for s in case.bodies.spheres])
-    radii = np.array([s.radius for s in case.bodies.spheres])
+    table = physics.bodies(case)
+    centres = np.array([b.position for b in table])
+    radii = np.array([b.radius for b in table])
     points = [centres - radii[:, None], centres + radii[:, None]] + [t.reshape(-1, 3) for t in triangles]
     cloud = np.concatenate(points)
     lower, upper = cloud.min(axis=0), cloud.max(axis=0)
@@ -64,7 +66,7 @@ def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -
     pad = 0.1 * extent + 5.0 * float(radii.max())
     lower, upper = lower - pad, upper + pad
     gravity = np.asarray(case.gravity)
-    speed = float(np.max(np.linalg.norm([s.velocity for s in case.bodies.spheres], axis=1)))
+    speed = float(np.max(np.linalg.norm([b.velocity for b in table], axis=1)))
     fall = min(0.5 * float(np.linalg.norm(gravity)) * end_time**2 + speed * end_time, 2.0 * extent + pad)
     if np.linalg.norm(gravity) > 0:
         direction = gravity / np.linalg.norm(gravity)

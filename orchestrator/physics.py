@@ -17,21 +17,50 @@ def sphere_mass(sphere: Sphere, density: float) -> float:
     return density * 4.0 / 3.0 * math.pi * sphere.radius**3
 
 
+@dataclass(frozen=True)
+class BodyInfo:
+    """What the orchestrator needs of one body, whatever its kind, in results.h5 order."""
+
+    material: str
+    mass: float
+    radius: float  # bounding radius
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    # How many sphere contacts one flat face can make at once (1 for a sphere): the effective
+    # stiffness of a face-to-face contact is that many times k_n, which shortens the contact.
+    face_contacts: int
+
+
+def bodies(case: Case) -> list[BodyInfo]:
+    """Spheres first, then clumps, as the engines number them."""
+    table = [
+        BodyInfo(s.material, sphere_mass(s, case.material(s.material).density), s.radius, s.position, s.velocity, 1)
+        for s in case.bodies.spheres
+    ]
+    for c in case.bodies.clumps:
+        shape = case.shape(c.shape)
+        clump = shape.clump(case.material(c.material).density)
+        nx, ny, nz = shape.layout
+        table.append(BodyInfo(c.material, clump.mass, clump.bounding_radius, c.position, c.velocity, max(nx * ny, nx * nz, ny * nz)))
+    return table
+
+
 def reference_masses(case: Case) -> dict[str, float]:
     """Mean body mass per body material: the mass the linear law's damping is tuned for."""
     totals: dict[str, list[float]] = {}
-    for sphere in case.bodies.spheres:
-        density = case.material(sphere.material).density
-        totals.setdefault(sphere.material, []).append(sphere_mass(sphere, density))
+    for body in bodies(case):
+        totals.setdefault(body.material, []).append(body.mass)
     return {name: sum(masses) / len(masses) for name, masses in totals.items()}
 
 
 def smallest_masses(case: Case) -> dict[str, float]:
-    """Lightest body per body material: it sets the shortest contact duration."""
+    """Lightest body per body material, its mass divided by its face-contact count.
+
+    m / n with stiffness k gives the same duration as m with stiffness n k: the shortest contact.
+    """
     smallest: dict[str, float] = {}
-    for sphere in case.bodies.spheres:
-        mass = sphere_mass(sphere, case.material(sphere.material).density)
-        smallest[sphere.material] = min(mass, smallest.get(sphere.material, math.inf))
+    for body in bodies(case):
+        smallest[body.material] = min(body.mass / body.face_contacts, smallest.get(body.material, math.inf))
     return smallest
 
 

@@ -56,11 +56,11 @@ def saved_case(rundir: Path) -> Case:
     return Case.model_validate_json((rundir / CASE_COPY).read_text())
 
 
-def sphere_materials(case: Case) -> np.ndarray:
+def body_materials(case: Case) -> np.ndarray:
     """Material of each body, in body order (both engines number bodies in case order)."""
-    return np.array([s.material for s in case.bodies.spheres])
+    return np.array([b.material for b in physics.bodies(case)])
 
 
-def sphere_masses(case: Case) -> np.ndarray:
+def body_masses(case: Case) -> np.ndarray:
     """Exact body masses from the case (dumps print fewer digits than the engines compute with)."""
-    return np.array([physics.sphere_mass(s, case.material(s.material).density) for s in case.bodies.spheres])
+    return np.array([b.mass for b in physics.bodies(case)])

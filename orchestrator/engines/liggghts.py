@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import geometry, physics
-from ..case import Case
+from ..case import Case, CaseError
 from ..results import Trajectory
 from . import common
 from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -90,6 +90,8 @@ class LiggghtsAdapter:
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
         from ..render import render
 
+        if case.bodies.clumps:
+            raise CaseError("bodies.clumps: clumps are not yet supported on LIGGGHTS in this version; use engine: yade")
         prepared = common.prepare(case, case_dir)
         common.save_case(case, rundir)
         types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
@@ -208,8 +210,8 @@ class LiggghtsAdapter:
         return Trajectory(
             time=np.asarray(steps, dtype=float) * dt,
             ids=ids,
-            material=common.sphere_materials(case),
-            mass=common.sphere_masses(case),
+            material=common.body_materials(case),
+            mass=common.body_masses(case),
             radius=np.array([s.radius for s in case.bodies.spheres]),
             position=position,
             velocity=velocity,

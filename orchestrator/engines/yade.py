@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import physics
+from ..bricks import world_sphere_centres
 from ..case import Case, ContactLaw
 from ..results import Trajectory
 from . import common
@@ -67,6 +68,14 @@ class YadeAdapter:
         spheres = [
             (s.material, s.radius, s.position, s.velocity, s.angular_velocity, s.fixed_rotation) for s in case.bodies.spheres
         ]
+        clumps = []
+        for c in case.bodies.clumps:
+            brick = case.shape(c.shape).clump(case.material(c.material).density)
+            centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
+            clumps.append(
+                (c.material, [tuple(float(v) for v in p) for p in centres], brick.radius, c.position, c.orientation,
+                 c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia))
+            )
         touching = case.touching_pairs()
         friction = [(p.materials[0], p.materials[1], p.mu) for p in prepared.pairs if frozenset(p.materials) in touching]
         context = {
@@ -80,6 +89,7 @@ class YadeAdapter:
             "yade_materials": yade_materials(case, prepared.pairs),
             "friction": friction,
             "spheres": spheres,
+            "clumps": clumps,
             "facets": facets,
         }
         script = rundir / SCRIPT_NAME
@@ -107,7 +117,7 @@ class YadeAdapter:
         return Trajectory(
             time=np.asarray(times),
             ids=first[:, 0].astype(np.int64),
-            material=common.sphere_materials(common.saved_case(rundir)),
+            material=common.body_materials(common.saved_case(rundir)),
             mass=first[:, 1].copy(),
             radius=first[:, 2].copy(),
             position=stack[:, :, 3:6],
