@@ -18,9 +18,26 @@ def centre_of_mass(trajectory: Trajectory) -> np.ndarray:
 
 
 def kinetic_energy(trajectory: Trajectory) -> np.ndarray:
-    """(frames,) translational kinetic energy in J (rotation excluded: inertia is engine-specific)."""
+    """(frames,) translational plus rotational kinetic energy in J.
+
+    Rotation: ½ Σ_k I_k ω_k² with ω in the body frame (ω_body = Rᵀ ω). Where the orientation is
+    unknown (LIGGGHTS spheres) the inertia is isotropic, so the world-frame ω gives the same sum.
+    """
     speed2 = np.nansum(trajectory.velocity**2, axis=2)
-    return 0.5 * speed2 @ trajectory.mass
+    translation = 0.5 * speed2 @ trajectory.mass
+    omega = np.nan_to_num(trajectory.angular_velocity)
+    q = trajectory.orientation
+    known = np.isfinite(q).all(axis=2)
+    body_omega = np.where(known[..., None], _rotate_inverse(np.where(known[..., None], q, [1.0, 0, 0, 0]), omega), omega)
+    rotation = 0.5 * np.einsum("fbk,bk->f", body_omega**2, trajectory.inertia)
+    return translation + rotation
+
+
+def _rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate vectors v by the inverse of unit quaternions q (w, x, y, z), elementwise over leading axes."""
+    w, u = q[..., :1], -q[..., 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
 
 
 def summary(trajectory: Trajectory) -> dict[str, float]:

@@ -29,19 +29,23 @@ class BodyInfo:
     # How many sphere contacts one flat face can make at once (1 for a sphere): the effective
     # stiffness of a face-to-face contact is that many times k_n, which shortens the contact.
     face_contacts: int
+    inertia: tuple[float, float, float]  # principal moments about the body axes
 
 
 def bodies(case: Case) -> list[BodyInfo]:
     """Spheres first, then clumps, as the engines number them."""
     table = [
-        BodyInfo(s.material, sphere_mass(s, case.material(s.material).density), s.radius, s.position, s.velocity, 1)
+        BodyInfo(s.material, mass, s.radius, s.position, s.velocity, 1, (0.4 * mass * s.radius**2,) * 3)
         for s in case.bodies.spheres
+        for mass in [sphere_mass(s, case.material(s.material).density)]
     ]
     for c in case.bodies.clumps:
         shape = case.shape(c.shape)
         clump = shape.clump(case.material(c.material).density)
         nx, ny, nz = shape.layout
-        table.append(BodyInfo(c.material, clump.mass, clump.bounding_radius, c.position, c.velocity, max(nx * ny, nx * nz, ny * nz)))
+        faces = max(nx * ny, nx * nz, ny * nz)
+        inertia = tuple(float(i) for i in clump.principal_inertia)
+        table.append(BodyInfo(c.material, clump.mass, clump.bounding_radius, c.position, c.velocity, faces, inertia))
     return table
 
 

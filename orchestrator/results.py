@@ -6,6 +6,7 @@ Layout (identical for every engine):
     /bodies/material          (bodies,)            material name
     /bodies/mass              (bodies,)            kg
     /bodies/radius            (bodies,)            m (bounding radius for non-spheres)
+    /bodies/inertia           (bodies, 3)          kg m², principal moments about the body axes
     /frames/position          (frames, bodies, 3)  m
     /frames/velocity          (frames, bodies, 3)  m/s
     /frames/angular_velocity  (frames, bodies, 3)  rad/s
@@ -36,6 +37,7 @@ class Trajectory:
     material: np.ndarray
     mass: np.ndarray
     radius: np.ndarray
+    inertia: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
     angular_velocity: np.ndarray
@@ -65,6 +67,8 @@ class Trajectory:
         for name in ("material", "mass", "radius"):
             if getattr(self, name).shape != (bodies,):
                 raise ValueError(f"trajectory {name} must have one entry per body")
+        if self.inertia.shape != (bodies, 3):
+            raise ValueError("trajectory inertia must have three principal moments per body")
 
 
 def write_results(path: Path, trajectory: Trajectory) -> None:
@@ -81,6 +85,7 @@ def write_results(path: Path, trajectory: Trajectory) -> None:
         bodies.create_dataset("material", data=trajectory.material.astype("S"))
         bodies.create_dataset("mass", data=trajectory.mass)
         bodies.create_dataset("radius", data=trajectory.radius)
+        bodies.create_dataset("inertia", data=trajectory.inertia)
         frames = store.create_group("frames")
         chunk = lambda width: (1, trajectory.n_bodies, width)  # noqa: E731 - one frame per chunk
         for name, width in (("position", 3), ("velocity", 3), ("angular_velocity", 3), ("orientation", 4)):
@@ -96,6 +101,7 @@ def read_results(path: Path) -> Trajectory:
             material=store["bodies/material"][()].astype(str),
             mass=store["bodies/mass"][()],
             radius=store["bodies/radius"][()],
+            inertia=store["bodies/inertia"][()],
             position=store["frames/position"][()],
             velocity=store["frames/velocity"][()],
             angular_velocity=store["frames/angular_velocity"][()],

@@ -64,3 +64,7 @@ def body_materials(case: Case) -> np.ndarray:
 def body_masses(case: Case) -> np.ndarray:
     """Exact body masses from the case (dumps print fewer digits than the engines compute with)."""
     return np.array([b.mass for b in physics.bodies(case)])
+
+
+def body_inertia(case: Case) -> np.ndarray:
+    return np.array([b.inertia for b in physics.bodies(case)])

@@ -213,6 +213,7 @@ class LiggghtsAdapter:
             material=common.body_materials(case),
             mass=common.body_masses(case),
             radius=np.array([s.radius for s in case.bodies.spheres]),
+            inertia=common.body_inertia(case),
             position=position,
             velocity=velocity,
             angular_velocity=spin,

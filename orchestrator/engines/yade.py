@@ -120,6 +120,7 @@ class YadeAdapter:
             material=common.body_materials(common.saved_case(rundir)),
             mass=first[:, 1].copy(),
             radius=first[:, 2].copy(),
+            inertia=common.body_inertia(common.saved_case(rundir)),
             position=stack[:, :, 3:6],
             velocity=stack[:, :, 6:9],
             angular_velocity=stack[:, :, 9:12],
