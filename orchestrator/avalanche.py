@@ -1,0 +1,155 @@
+"""The Manzella & Labiouse (2009) avalanche set-up, as case data: boards, release box, bricks.
+
+Frame: x horizontal along the flow, the slope toe at x = 0 (the inclined board at x < 0), y across,
+z vertical (the flat board at z = 0). A point at distance s up the slope is (-s cos α, y, s sin α).
+The release box sits on the slope: its trap (downslope wall) at slope distance launch_height / sin α,
+its depth running upslope, its height normal to the slope. Opening the trap at t = 0 is modelled by
+starting the avalanche run without that wall.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bricks import BrickClump, quaternion_matrix
+from .packing import random_orientations
+
+
+@dataclass(frozen=True)
+class AvalancheGeometry:
+    slope_deg: float = 45.0
+    launch_height: float = 1.0
+    board_length: float = 3.0  # along the flow, each board
+    board_width: float = 4.0
+    box_depth: float = 0.6  # along the slope
+    box_width: float = 0.4  # across
+    box_height: float = 0.2  # normal to the slope
+
+    @property
+    def down(self) -> np.ndarray:
+        a = math.radians(self.slope_deg)
+        return np.array([math.cos(a), 0.0, -math.sin(a)])
+
+    @property
+    def normal(self) -> np.ndarray:
+        a = math.radians(self.slope_deg)
+        return np.array([math.sin(a), 0.0, math.cos(a)])
+
+    def on_slope(self, s: float, y: float = 0.0, n: float = 0.0) -> np.ndarray:
+        """World point at slope distance s from the toe (upslope), lateral y, height n above the board."""
+        return -s * self.down + np.array([0.0, y, 0.0]) + n * self.normal
+
+    @property
+    def trap_distance(self) -> float:
+        return self.launch_height / math.sin(math.radians(self.slope_deg))
+
+    def box_corner(self) -> np.ndarray:
+        """Lowest corner of the box: at the trap, on the board, at y = -width/2."""
+        return self.on_slope(self.trap_distance, -self.box_width / 2)
+
+    def box_to_world(self, local: np.ndarray) -> np.ndarray:
+        """(…, 3) box-frame points (u upslope, v across, n normal) to world points."""
+        axes = np.stack([-self.down, np.array([0.0, 1.0, 0.0]), self.normal])
+        return self.box_corner() + np.asarray(local) @ axes
+
+    def walls(self, trap_closed: bool, wall_height: float | None = None) -> list[dict[str, object]]:
+        """Rectangles: slope board, flat board, box side and back walls, and the trap if closed."""
+        height = wall_height if wall_height is not None else self.box_height
+        top = self.on_slope(self.board_length, -self.board_width / 2)
+        walls: list[dict[str, object]] = [
+            _rectangle("slope", "board", top, self.board_length * self.down, (0.0, self.board_width, 0.0)),
+            _rectangle("runout", "board", (0.0, -self.board_width / 2, 0.0), (self.board_length, 0.0, 0.0), (0.0, self.board_width, 0.0)),
+        ]
+        corner = self.box_corner()
+        up, across, normal = -self.down * self.box_depth, np.array([0.0, self.box_width, 0.0]), self.normal * height
+        walls.append(_rectangle("box_left", "box", corner, up, normal))
+        walls.append(_rectangle("box_right", "box", corner + across, up, normal))
+        walls.append(_rectangle("box_back", "box", corner + up, across, normal))
+        if trap_closed:
+            walls.append(_rectangle("trap", "box", corner, across, normal))
+        return walls
+
+
+def _rectangle(name: str, material: str, origin: object, edge1: object, edge2: object) -> dict[str, object]:
+    return {
+        "type": "rectangle",
+        "name": name,
+        "material": material,
+        "origin": [float(v) for v in origin],  # type: ignore[union-attr]
+        "edge1": [float(v) for v in edge1],  # type: ignore[union-attr]
+        "edge2": [float(v) for v in edge2],  # type: ignore[union-attr]
+    }
+
+
+def rain_positions(geometry: AvalancheGeometry, brick: BrickClump, count: int, seed: int, gap: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
+    """Randomly oriented bricks on a grid inside the box footprint, stacked along the slope normal.
+
+    Cells are one bounding diameter wide, so no two bricks overlap whatever their orientation.
+    Returns world positions (count, 3) and orientations (count, 4; w, x, y, z).
+    """
+    cell = 2.0 * brick.bounding_radius + gap
+    nu = max(1, int(geometry.box_depth // cell))
+    nv = max(1, int(geometry.box_width // cell))
+    index = np.arange(count)
+    i, j, k = index % nu, (index // nu) % nv, index // (nu * nv)
+    local = np.stack([(i + 0.5) * cell, (j + 0.5) * cell, (k + 0.5) * cell + gap], axis=1)
+    return geometry.box_to_world(local), random_orientations(count, seed)
+
+
+def rain_height(geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.001) -> float:
+    """Height above the box floor (along the normal) that the rain grid of `count` bricks reaches."""
+    cell = 2.0 * brick.bounding_radius + gap
+    per_layer = max(1, int(geometry.box_depth // cell)) * max(1, int(geometry.box_width // cell))
+    return math.ceil(count / per_layer) * cell + 2 * gap
+
+
+def brick_count(volume: float, apparent_density: float, brick: BrickClump) -> int:
+    """Bricks in a volume of pile at an apparent density (e.g. 40 l at 1000 kg/m³ → ≈ 6300 bricks)."""
+    return int(round(volume * apparent_density / brick.mass))
+
+
+def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orientations: np.ndarray, brick: BrickClump, cells: int = 8) -> float:
+    """Total brick mass over the bulk volume they fill in the box: footprint × mean top height.
+
+    The top height is taken per cell of a cells × cells grid over the box floor, from the highest
+    sphere surface of the bricks above it (heights in the box frame, normal to the floor).
+    """
+    axes = np.stack([-geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal])
+    corner = geometry.box_corner()
+    tops = np.zeros((cells, cells))
+    for position, orientation in zip(positions, orientations):
+        spheres = (position + brick.centres @ quaternion_matrix(orientation).T - corner) @ axes.T
+        for u, v, n in spheres:
+            a = int(np.clip(u / geometry.box_depth * cells, 0, cells - 1))
+            b = int(np.clip(v / geometry.box_width * cells, 0, cells - 1))
+            tops[a, b] = max(tops[a, b], n + brick.radius)
+    bulk = geometry.box_depth * geometry.box_width * float(tops.mean())
+    return len(positions) * brick.mass / bulk
+
+
+def ordered_pile(geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+    """Bricks in regular rows: length along the slope, width across, thickness normal; layers upward.
+
+    The brick frame (length x, width y, thickness z) is turned onto the box frame (u, v, n).
+    """
+    nu = max(1, int(geometry.box_depth // (brick.length + gap)))
+    nv = max(1, int(geometry.box_width // (brick.width + gap)))
+    index = np.arange(count)
+    i, j, k = index % nu, (index // nu) % nv, index // (nu * nv)
+    local = np.stack(
+        [(i + 0.5) * (brick.length + gap), (j + 0.5) * (brick.width + gap), (k + 0.5) * (brick.thickness + gap) + gap], axis=1
+    )
+    # Rotation taking the brick axes onto (down-slope, across, normal), a right-handed frame.
+    matrix = np.stack([geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal], axis=1)
+    quaternion = _matrix_quaternion(matrix)
+    return geometry.box_to_world(local), np.tile(quaternion, (count, 1))
+
+
+def _matrix_quaternion(matrix: np.ndarray) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(matrix).as_quat()
+    return np.array([w, x, y, z])
