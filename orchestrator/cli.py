@@ -116,11 +116,80 @@ def demo(engine: str | None, output: Path | None) -> None:
     _run(DEMO_CASE, engine, output, None)
 
 
+def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -> Path:
+    """Plots, snapshots, VTK and index.html for a study directory; returns the page."""
+    from . import report as pictures
+    from .avalanche_study import load_reference
+
+    trajectory = read_results(outdir / "release" / RESULTS)
+    figures = outdir / "report"
+    figures.mkdir(exist_ok=True)
+    pictures.plot_deposit(trajectory, figures / "deposit.png", slope_deg)
+    pictures.plot_front(report, figures / "front.png")
+    snapshots = pictures.plot_snapshots(trajectory, figures, slope_deg=slope_deg)
+    pictures.export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
+    rows = pictures.comparison_rows(report, load_reference())
+    return pictures.write_html(figures, outdir.name, rows, [figures / "deposit.png", figures / "front.png", *snapshots])
+
+
+def study_table(title: str, report: dict[str, Any]) -> Table:
+    from .avalanche_study import load_reference
+    from .report import comparison_rows
+
+    table = Table(title=title, header_style="bold")
+    for column in ("metric", "value", "reference", "check"):
+        table.add_column(column, justify="right" if column == "value" else "left")
+    for name, value, reference, verdict in comparison_rows(report, load_reference()):
+        table.add_row(name, f"{value:.4g}", reference, verdict)
+    return table
+
+
+@main.command()
+@click.argument("study_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
+def avalanche(study_path: Path, engine: str | None, output: Path | None) -> None:
+    """Pack bricks, release them down the slope, and report deposit and front against the references."""
+    from .avalanche_study import load_study, run_study
+
+    try:
+        study = load_study(study_path)
+        if engine:
+            study = study.model_copy(update={"engine": engine})
+        outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        console.print(f"[bold]{study.name}[/]: {study.brick_count} bricks, {study.packing.kind}, engine {study.engine.value} → {outdir}")
+        with Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:
+
+            def stage(name: str) -> Callable[[float, float], None]:
+                task = progress.add_task("starting", total=1.0, stage=name)
+                return _progress_callback(progress, task)
+
+            report = run_study(study, outdir, progress=stage)
+    except CaseError as error:
+        _fail(str(error))
+    except EngineError as error:
+        _fail(str(error), code=3)
+    page = write_study_report(outdir, report, study.geometry.slope_deg)
+    console.print(study_table(f"{study.name} on {study.engine.value}", report))
+    console.print(f"report: {page}")
+
+
 @main.command()
 @click.argument("rundir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the metrics as JSON.")
 def post(rundir: Path, as_json: bool) -> None:
-    """Print summary metrics of a finished run directory."""
+    """Print summary metrics of a finished run (or avalanche study) directory."""
+    if (rundir / "report.json").exists():
+        report = json.loads((rundir / "report.json").read_text())
+        study_case = json.loads((rundir / "release" / "case.json").read_text())
+        slope = _slope_of(study_case)
+        page = write_study_report(rundir, report, slope)
+        if as_json:
+            console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
+        else:
+            console.print(study_table(rundir.name, report))
+            console.print(f"report: {page}")
+        return
     path = rundir / RESULTS
     if not path.exists():
         record = rundir / "run.json"
@@ -132,6 +201,15 @@ def post(rundir: Path, as_json: bool) -> None:
         console.print_json(json.dumps(values))
     else:
         console.print(metrics_table(f"{rundir} ({trajectory.attrs.get('engine', '?')})", values))
+
+
+def _slope_of(case_data: dict[str, Any]) -> float:
+    """Slope angle from the 'slope' wall of a saved avalanche case."""
+    import math
+
+    wall = next(w for w in case_data["walls"] if w["name"] == "slope")
+    dx, _, dz = wall["edge1"]
+    return math.degrees(math.atan2(abs(dz), abs(dx)))
 
 
 @main.command()

@@ -1,0 +1,149 @@
+"""Pictures and pages of an avalanche run: what a person looks at before reading numbers.
+
+All figures are matplotlib PNGs (Agg backend, no display needed); `index.html` shows them with the
+metrics table; `bodies_NNNN.vtu` (meshio) opens in ParaView.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import meshio  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .results import Trajectory  # noqa: E402
+
+FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))
+
+
+def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[tuple[str, float, str, str]]:
+    """(metric, value, reference, verdict) rows: references exist for trends, not for the scaled deposits."""
+    deposit = report["deposit"]
+    findings = reference.get("avalanche", {}).get("manzella2009", {}).get("random_pour_findings", {})
+    rows = [
+        ("L (m)", deposit["length"], "", ""),
+        ("R (m)", deposit["runout"], "", ""),
+        ("W (m)", deposit["width"], "", ""),
+        ("H (m)", deposit["height"], f"DEM ≈ {1 + findings.get('height_overestimate_by_dem', 0.6):.1f} × experiment", ""),
+        ("X_CM (m)", deposit["x_cm"], "", ""),
+        ("φ_CM (°)", deposit["travel_angle_cm_deg"], "", ""),
+        ("φ_app (°)", deposit["fahrboschung_deg"], "", ""),
+        ("outlier bricks", deposit["outliers"], "", ""),
+        ("front max speed (m/s)", report["front"]["max_velocity"], "", ""),
+        ("front final position (m)", report["front"]["final_position"], "", ""),
+    ]
+    packing = report.get("packing")
+    if packing:
+        target = packing["target_apparent_density"]
+        value = packing["apparent_density"]
+        verdict = "pass" if abs(value / target - 1) <= 0.1 else "off by more than 10 %"
+        rows.append(("apparent density (kg/m³)", value, f"{target:g}", verdict))
+    return rows
+
+
+def plot_deposit(trajectory: Trajectory, path: Path, slope_deg: float = 45.0) -> None:
+    """Plan view (x, y) and longitudinal section (x, z) of the final state, coloured by height."""
+    final = trajectory.position[-1]
+    ok = np.isfinite(final).all(axis=1)
+    fig, (plan, section) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
+    scatter = plan.scatter(final[ok, 0], final[ok, 1], c=final[ok, 2], s=6, cmap="viridis")
+    plan.axvline(0.0, color="k", lw=0.8, ls="--", label="slope toe")
+    plan.set_ylabel("y (m)")
+    plan.set_aspect("equal", adjustable="datalim")
+    plan.set_title("Deposit, plan view (colour: height)")
+    fig.colorbar(scatter, ax=plan, label="z (m)")
+    section.scatter(final[ok, 0], final[ok, 2], s=4, color="tab:brown")
+    left, right = min(final[ok, 0].min(), 0.0) - 0.05, final[ok, 0].max() + 0.05
+    section.plot([left, 0.0, right], [-left * math.tan(math.radians(slope_deg)), 0.0, 0.0], color="k", lw=0.8)
+    section.set_xlabel("x from the slope toe (m)")
+    section.set_ylabel("z (m)")
+    section.set_title("Longitudinal section")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_front(report: dict[str, Any], path: Path) -> None:
+    """Front position versus time, and front velocity versus front position on the flat board."""
+    front = report["front"]
+    time, position, velocity = (np.asarray(front[k], dtype=float) for k in ("time", "position", "velocity"))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
+    left.plot(time, position, color="tab:blue")
+    left.axhline(0.0, color="k", lw=0.8, ls="--")
+    left.set_xlabel("t (s)")
+    left.set_ylabel("front x (m)")
+    left.set_title("Mass front position")
+    flat = position >= 0.0
+    right.plot(position[flat], velocity[flat], color="tab:red", marker=".")
+    for start, end, label in FLAT_PHASES:
+        right.axvspan(start, end, alpha=0.08, color="grey")
+        right.text((start + end) / 2, 0.02, label, ha="center", va="bottom", fontsize=7, rotation=90, transform=right.get_xaxis_transform())
+    right.set_xlabel("front position on the flat board (m)")
+    right.set_ylabel("front velocity (m/s)")
+    right.set_title("Front velocity on the flat (cf. the 2012 study, Figs 12c/14c)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_snapshots(trajectory: Trajectory, outdir: Path, count: int = 6, slope_deg: float = 45.0) -> list[Path]:
+    """Side views (x, z) at evenly spaced times, one PNG each, on common axes."""
+    frames = np.unique(np.linspace(0, trajectory.n_frames - 1, count).round().astype(int))
+    positions = trajectory.position
+    ok = np.isfinite(positions[..., 0])
+    xlim = (np.nanmin(positions[..., 0]) - 0.05, np.nanmax(positions[..., 0]) + 0.05)
+    zlim = (-0.02, np.nanmax(positions[..., 2]) + 0.05)
+    paths = []
+    for frame in frames:
+        fig, ax = plt.subplots(figsize=(8, 3.2), constrained_layout=True)
+        ax.plot([xlim[0], 0.0, xlim[1]], [max(-xlim[0], 0.0) * math.tan(math.radians(slope_deg)), 0.0, 0.0], color="k", lw=1)
+        ax.scatter(positions[frame, ok[frame], 0], positions[frame, ok[frame], 2], s=4, color="tab:brown")
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*zlim)
+        ax.set_aspect("equal")
+        ax.set_title(f"t = {trajectory.time[frame]:.2f} s")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("z (m)")
+        path = outdir / f"snapshot_{frame:04d}.png"
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def export_vtk(trajectory: Trajectory, outdir: Path, every: int = 1) -> list[Path]:
+    """One .vtu point cloud per frame (velocity, radius, mass as point data) for ParaView."""
+    paths = []
+    for frame in range(0, trajectory.n_frames, every):
+        ok = np.isfinite(trajectory.position[frame, :, 0])
+        points = trajectory.position[frame, ok]
+        mesh = meshio.Mesh(
+            points,
+            [("vertex", np.arange(len(points)).reshape(-1, 1))],
+            point_data={"velocity": trajectory.velocity[frame, ok], "radius": trajectory.radius[ok], "mass": trajectory.mass[ok]},
+        )
+        path = outdir / f"bodies_{frame:04d}.vtu"
+        meshio.write(path, mesh)
+        paths.append(path)
+    return paths
+
+
+def write_html(outdir: Path, title: str, rows: list[tuple[str, float, str, str]], images: list[Path]) -> Path:
+    table = "\n".join(
+        f"<tr><td>{html.escape(name)}</td><td>{value:.4g}</td><td>{html.escape(ref)}</td><td>{html.escape(verdict)}</td></tr>"
+        for name, value, ref, verdict in rows
+    )
+    figures = "\n".join(f'<figure><img src="{html.escape(p.name)}" alt="{html.escape(p.stem)}"></figure>' for p in images)
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
+<style>body{{font-family:sans-serif;margin:2em;max-width:1100px}}table{{border-collapse:collapse}}
+td,th{{border:1px solid #ccc;padding:4px 10px}}img{{max-width:100%}}figure{{margin:1em 0}}</style></head>
+<body><h1>{html.escape(title)}</h1><table><tr><th>metric</th><th>value</th><th>reference</th><th>check</th></tr>
+{table}</table>{figures}</body></html>"""
+    path = outdir / "index.html"
+    path.write_text(page)
+    return path
