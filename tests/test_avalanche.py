@@ -1,0 +1,91 @@
+"""The avalanche set-up: geometry, packings and brick counts, then a tiny study on a real engine."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
+from orchestrator.avalanche_study import AvalancheStudy, packing_key, run_study
+from orchestrator.bricks import BrickClump, quaternion_matrix
+from orchestrator.results import read_results
+from orchestrator.runner import RESULTS
+
+from conftest import requires_yade
+
+BRICK = BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1))
+
+
+def test_release_box_sits_at_the_launch_height() -> None:
+    geometry = AvalancheGeometry()
+    corner = geometry.box_corner()
+    assert corner[2] == pytest.approx(1.0)  # the trap's foot is 1 m above the toe
+    assert corner[0] == pytest.approx(-1.0)  # on a 45° slope, 1 m back from the toe
+    walls = {w["name"]: w for w in geometry.walls(trap_closed=True)}
+    assert set(walls) == {"slope", "runout", "box_left", "box_right", "box_back", "trap"}
+    assert "trap" not in {w["name"] for w in geometry.walls(trap_closed=False)}
+    assert np.linalg.norm(walls["box_back"]["edge2"]) == pytest.approx(0.2)
+
+
+def test_brick_counts_match_the_2012_study() -> None:
+    assert brick_count(0.040, 1000.0, BRICK) == pytest.approx(6300, rel=0.02)
+    assert brick_count(0.040, 1600.0, BRICK) == pytest.approx(10000, rel=0.02)
+
+
+def test_rain_grid_lies_inside_the_box_footprint() -> None:
+    geometry = AvalancheGeometry()
+    positions, orientations = rain_positions(geometry, BRICK, 300, seed=3)
+    axes = np.stack([-geometry.down, [0.0, 1.0, 0.0], geometry.normal])
+    local = (positions - geometry.box_corner()) @ axes.T
+    assert np.all(local[:, 0] - BRICK.bounding_radius >= 0) and np.all(local[:, 0] + BRICK.bounding_radius <= geometry.box_depth)
+    assert np.all(local[:, 1] - BRICK.bounding_radius >= 0) and np.all(local[:, 1] + BRICK.bounding_radius <= geometry.box_width)
+    assert np.all(local[:, 2] - BRICK.bounding_radius > 0)
+    np.testing.assert_allclose(np.linalg.norm(orientations, axis=1), 1.0)
+    # Same seed, same packing; another seed, another.
+    assert np.array_equal(rain_positions(geometry, BRICK, 300, seed=3)[1], orientations)
+    assert not np.array_equal(rain_positions(geometry, BRICK, 300, seed=4)[1], orientations)
+
+
+def test_ordered_pile_lays_bricks_along_the_slope_at_near_full_density() -> None:
+    geometry = AvalancheGeometry()
+    positions, orientations = ordered_pile(geometry, BRICK, 19 * 26 * 2)  # two full layers
+    long_axis = quaternion_matrix(orientations[0]) @ [1.0, 0.0, 0.0]
+    np.testing.assert_allclose(long_axis, geometry.down, atol=1e-12)
+    # Two full layers: mass / (footprint × 2 layer heights) = 1700 × fill of the footprint.
+    fill = (19 * BRICK.length) * (26 * BRICK.width) / (0.6 * 0.4)
+    expected = 1700.0 * fill * BRICK.thickness / (BRICK.thickness + 0.0005 + 0.0005 / 2)
+    assert apparent_density(geometry, positions, orientations, BRICK) == pytest.approx(expected, rel=0.05)
+
+
+def tiny_study(engine: str) -> AvalancheStudy:
+    """≈30 bricks in a 12 × 10 cm box launched from 25 cm: a real avalanche in under a minute."""
+    return AvalancheStudy.model_validate(
+        {
+            "name": "tiny",
+            "engine": engine,
+            "geometry": {"launch_height": 0.25, "board_length": 0.8, "board_width": 0.5, "box_depth": 0.12, "box_width": 0.1, "box_height": 0.08},
+            "packing": {"volume": 1.9e-4, "settle_time": 0.4},
+            "release": {"duration": 1.6, "output_interval": 0.02},
+        }
+    )
+
+
+@requires_yade
+@pytest.mark.engine
+def test_tiny_avalanche_reaches_the_flat_and_stops(tmp_path: Path) -> None:
+    study = tiny_study("yade")
+    report = run_study(study, tmp_path)
+    trajectory = read_results(tmp_path / "release" / RESULTS)
+    packed = read_results(tmp_path / f"packing-{packing_key(study)}" / RESULTS)
+    assert trajectory.n_bodies == packed.n_bodies == study.brick_count  # no brick lost
+    assert trajectory.mass.sum() == pytest.approx(packed.mass.sum(), rel=1e-12)  # mass conserved
+    deposit = report["deposit"]
+    assert deposit["bodies_in_deposit"] + deposit["outliers"] == study.brick_count  # every brick accounted for
+    assert deposit["x_cm"] > 0.0  # the mass centre ended on the flat board
+    assert report["at_rest"], "bricks still moving after 1.6 s"
+    assert 0.0 < deposit["travel_angle_cm_deg"] < 45.0
+    # Rerunning reuses the packing and the release: nothing new is computed.
+    assert run_study(study, tmp_path)["deposit"] == deposit
