@@ -89,3 +89,12 @@ def test_tiny_avalanche_reaches_the_flat_and_stops(tmp_path: Path) -> None:
     assert 0.0 < deposit["travel_angle_cm_deg"] < 45.0
     # Rerunning reuses the packing and the release: nothing new is computed.
     assert run_study(study, tmp_path)["deposit"] == deposit
+
+
+def test_preset_studies_load_with_the_paper_brick_counts() -> None:
+    from orchestrator.avalanche_study import load_study
+
+    presets = {p.stem: load_study(p) for p in sorted((Path(__file__).parent.parent / "cases" / "avalanche").glob("*.yaml"))}
+    assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
+    assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
+    assert presets["small"].brick_count == pytest.approx(630, rel=0.02)
