@@ -64,6 +64,16 @@ class EngineAdapter(Protocol):
     def read_output(self, rundir: Path) -> Trajectory: ...
 
 
+def die_with_parent() -> None:
+    """Ask Linux to SIGKILL this process when its parent dies, so no engine outlives a killed campaign."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, 9)  # PR_SET_PDEATHSIG, SIGKILL
+    except (OSError, AttributeError):
+        pass  # not Linux: engines may outlive a killed orchestrator
+
+
 def require_executable(name: str, install_hint: str) -> str:
     path = shutil.which(name)
     if path is None:
@@ -105,6 +115,7 @@ def run_engine(
                 errors="replace",
                 env=env,
                 bufsize=1,
+                preexec_fn=die_with_parent,
             )
         except OSError as error:
             raise EngineError(f"could not start {command[0]}: {error.strerror}", deck, log_path) from None

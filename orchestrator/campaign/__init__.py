@@ -1,0 +1,1 @@
+"""Campaigns: designs over a base case, content-addressed runs, executors, index, calibration."""

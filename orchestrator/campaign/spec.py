@@ -1,0 +1,201 @@
+"""A campaign file: a base case plus what varies, expanded into a list of validated cases.
+
+Parameters are dotted paths into the case (`contacts.1.mu`, `bodies.spheres.0.velocity.2`).
+Designs: `grid` (every combination), `zip` (lists taken together), `lhs` and `sobol` (scipy.stats.qmc
+over ranges). Each design block multiplies the others (a grid × a Sobol design, say); `replicates`
+repeats every point with several seeds; `derived` sets parameters from others with arithmetic
+expressions (`contacts.0.kn: "contacts.1.kn * 2"`), evaluated by a small AST walker, never `eval`.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import itertools
+import operator
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+import yaml
+from pydantic import Field, ValidationError, model_validator
+from scipy.stats import qmc
+
+from ..case import Case, CaseError, Name, Strict, _format_error, parse_case
+
+ParameterPath = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+))*$")]
+
+
+class GridDesign(Strict):
+    kind: Literal["grid"]
+    parameters: dict[ParameterPath, Annotated[list[Any], Field(min_length=1)]]
+
+
+class ZipDesign(Strict):
+    kind: Literal["zip"]
+    parameters: dict[ParameterPath, Annotated[list[Any], Field(min_length=1)]]
+
+    @model_validator(mode="after")
+    def _same_lengths(self) -> "ZipDesign":
+        if len({len(v) for v in self.parameters.values()}) > 1:
+            raise ValueError("every list of a zip design must have the same length")
+        return self
+
+
+class SampledDesign(Strict):
+    """Latin hypercube or Sobol points over [low, high] ranges (Sobol: n is rounded up to a power of 2)."""
+
+    kind: Literal["lhs", "sobol"]
+    samples: Annotated[int, Field(ge=1, le=100_000)]
+    seed: Annotated[int, Field(ge=0)] = 0
+    ranges: dict[ParameterPath, tuple[float, float]]
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "SampledDesign":
+        for name, (low, high) in self.ranges.items():
+            if not low < high:
+                raise ValueError(f"ranges.{name}: low must be below high")
+        return self
+
+
+Design = Annotated[Union[GridDesign, ZipDesign, SampledDesign], Field(discriminator="kind")]
+
+
+class CampaignSpec(Strict):
+    name: Name
+    base: str  # case file, relative to the campaign file
+    engine: Literal["liggghts", "yade"] | None = None
+    designs: list[Design] = []
+    replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
+    derived: dict[ParameterPath, str] = {}
+    timeout_s: Annotated[float, Field(gt=0)] | None = None
+
+
+def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
+    """The campaign and its base case (as a mapping), both validated."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as error:
+        raise CaseError(f"{path}: cannot read the campaign ({error})") from None
+    try:
+        spec = CampaignSpec.model_validate(data)
+    except ValidationError as error:
+        raise CaseError(f"{path}: {_format_error(error)}") from None
+    base_path = (path.parent / spec.base).resolve()
+    try:
+        base = yaml.safe_load(base_path.read_text())
+    except (OSError, yaml.YAMLError) as error:
+        raise CaseError(f"{path}: base: cannot read {base_path} ({error})") from None
+    parse_case(base, source=str(base_path))  # the base must be valid on its own
+    return spec, base
+
+
+def design_points(design: GridDesign | ZipDesign | SampledDesign) -> list[dict[str, Any]]:
+    if isinstance(design, GridDesign):
+        names = list(design.parameters)
+        return [dict(zip(names, values)) for values in itertools.product(*design.parameters.values())]
+    if isinstance(design, ZipDesign):
+        names = list(design.parameters)
+        return [dict(zip(names, values)) for values in zip(*design.parameters.values())]
+    names = list(design.ranges)
+    if design.kind == "lhs":
+        unit = qmc.LatinHypercube(d=len(names), seed=design.seed).random(design.samples)
+    else:
+        exponent = int(np.ceil(np.log2(design.samples)))
+        unit = qmc.Sobol(d=len(names), scramble=True, seed=design.seed).random_base2(exponent)
+    low = np.array([design.ranges[n][0] for n in names])
+    high = np.array([design.ranges[n][1] for n in names])
+    scaled = qmc.scale(unit, low, high)
+    return [{n: float(v) for n, v in zip(names, row)} for row in scaled]
+
+
+def set_path(data: dict[str, Any], path: str, value: Any) -> None:
+    """Set a dotted path in nested dicts/lists; the path must exist (typos are errors, not new keys)."""
+    parts = path.split(".")
+    node: Any = data
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        key: Any = int(part) if part.isdigit() else part
+        try:
+            if last:
+                if isinstance(node, dict) and key not in node and not _optional_key(parts):
+                    raise KeyError(key)
+                node[key] = value
+            else:
+                node = node[key]
+        except (KeyError, IndexError, TypeError):
+            raise CaseError(f"campaign parameter {path!r}: the base case has no {'.'.join(parts[: depth + 1])!r}") from None
+
+
+def _optional_key(parts: list[str]) -> bool:
+    """Leaves a campaign may add although the base omits them (they have defaults in the case model)."""
+    return parts[-1] in {"law", "seed", "velocity", "angular_velocity", "step", "safety_factor", "engine", "fixed_rotation"}
+
+
+def get_path(data: dict[str, Any], path: str) -> Any:
+    node: Any = data
+    for part in path.split("."):
+        node = node[int(part)] if part.isdigit() else node[part]
+    return node
+
+
+_OPERATORS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv, ast.Pow: operator.pow}
+
+
+def evaluate(expression: str, data: dict[str, Any]) -> float:
+    """Arithmetic over numbers and dotted case paths: + - * / ** and parentheses, nothing else."""
+
+    def walk(node: ast.AST) -> float:
+        if isinstance(node, ast.Expression):
+            return walk(node.body)
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
+            return float(node.value)
+        if isinstance(node, ast.BinOp) and type(node.op) in _OPERATORS:
+            return _OPERATORS[type(node.op)](walk(node.left), walk(node.right))
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            return -walk(node.operand)
+        if isinstance(node, (ast.Name, ast.Attribute, ast.Subscript)):
+            return float(get_path(data, _dotted(node)))
+        raise CaseError(f"derived expression {expression!r}: only numbers, case paths and + - * / ** are allowed")
+
+    try:
+        return walk(ast.parse(expression, mode="eval"))
+    except SyntaxError:
+        raise CaseError(f"derived expression {expression!r} is not valid arithmetic") from None
+    except (KeyError, IndexError, TypeError):
+        raise CaseError(f"derived expression {expression!r} names a path the case does not have") from None
+
+
+def _dotted(node: ast.AST) -> str:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        return f"{_dotted(node.value)}.{node.attr}"
+    if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+        return f"{_dotted(node.value)}.{node.slice.value}"
+    raise CaseError("derived expressions may only name case paths like contacts.0.kn")
+
+
+def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Case]]:
+    """(varied parameters, validated case) for every point × replicate, in a stable order."""
+    blocks = [design_points(design) for design in spec.designs] or [[{}]]
+    points = [dict(itertools.chain.from_iterable(p.items() for p in combo)) for combo in itertools.product(*blocks)]
+    expanded = []
+    for index, point in enumerate(points):
+        for replicate in range(spec.replicates):
+            data = copy.deepcopy(base)
+            if spec.engine:
+                data["engine"] = spec.engine
+            parameters = dict(point)
+            if spec.replicates > 1:
+                data["seed"] = int(base.get("seed", 12345)) + replicate
+                parameters["seed"] = data["seed"]
+            for path, value in point.items():
+                set_path(data, path, value)
+            for path, expression in spec.derived.items():
+                value = evaluate(expression, data)
+                set_path(data, path, value)
+                parameters[path] = value
+            case = parse_case(data, source=f"{spec.name} point {index}" + (f" replicate {replicate}" if spec.replicates > 1 else ""))
+            expanded.append((parameters, case))
+    return expanded
