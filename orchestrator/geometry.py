@@ -52,8 +52,9 @@ def write_ascii_stl(path: Path, triangles: np.ndarray) -> None:
 def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -> Domain:
     """A box holding every body and wall, padded so that bodies do not leave it in normal use.
 
-    Padding: 10 % of the extent plus 5 radii on every side, and along gravity the free-fall
-    distance over the run (capped at twice the extent) so a case without a floor keeps its bodies.
+    Padding: 10 % of the extent, 5 radii and the distance the fastest initial body covers in the
+    run on every side, and along gravity the free-fall distance over the run (capped at twice the
+    extent when walls exist to catch the bodies) so a case without a floor keeps its bodies.
     A case can always give `domain:` explicitly.
     """
     table = physics.bodies(case)
@@ -63,11 +64,13 @@ def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -
     cloud = np.concatenate(points)
     lower, upper = cloud.min(axis=0), cloud.max(axis=0)
     extent = float(np.max(upper - lower))
-    pad = 0.1 * extent + 5.0 * float(radii.max())
+    speed = float(np.max(np.linalg.norm([b.velocity for b in table], axis=1)))
+    pad = 0.1 * extent + 5.0 * float(radii.max()) + speed * end_time
     lower, upper = lower - pad, upper + pad
     gravity = np.asarray(case.gravity)
-    speed = float(np.max(np.linalg.norm([b.velocity for b in table], axis=1)))
-    fall = min(0.5 * float(np.linalg.norm(gravity)) * end_time**2 + speed * end_time, 2.0 * extent + pad)
+    fall = 0.5 * float(np.linalg.norm(gravity)) * end_time**2
+    if case.walls:  # walls catch the bodies: no need for the whole free fall
+        fall = min(fall, 2.0 * extent + pad)
     if np.linalg.norm(gravity) > 0:
         direction = gravity / np.linalg.norm(gravity)
         lower = lower + np.minimum(direction, 0.0) * fall

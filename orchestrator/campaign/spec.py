@@ -10,6 +10,7 @@ expressions (`contacts.0.kn: "contacts.1.kn * 2"`), evaluated by a small AST wal
 from __future__ import annotations
 
 import ast
+import re
 import copy
 import itertools
 import operator
@@ -129,7 +130,7 @@ def set_path(data: dict[str, Any], path: str, value: Any) -> None:
 
 def _optional_key(parts: list[str]) -> bool:
     """Leaves a campaign may add although the base omits them (they have defaults in the case model)."""
-    return parts[-1] in {"law", "seed", "velocity", "angular_velocity", "step", "safety_factor", "engine", "fixed_rotation"}
+    return parts[-1] in {"law", "seed", "velocity", "angular_velocity", "step", "safety_factor", "engine", "fixed_rotation", "domain", "orientation"}
 
 
 def get_path(data: dict[str, Any], path: str) -> Any:
@@ -159,7 +160,8 @@ def evaluate(expression: str, data: dict[str, Any]) -> float:
         raise CaseError(f"derived expression {expression!r}: only numbers, case paths and + - * / ** are allowed")
 
     try:
-        return walk(ast.parse(expression, mode="eval"))
+        # Case paths index lists with dots (contacts.0.kn); Python wants contacts[0].kn.
+        return walk(ast.parse(re.sub(r"(?<=[A-Za-z_\]])\.(\d+)", r"[\1]", expression), mode="eval"))
     except SyntaxError:
         raise CaseError(f"derived expression {expression!r} is not valid arithmetic") from None
     except (KeyError, IndexError, TypeError):

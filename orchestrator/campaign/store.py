@@ -37,13 +37,18 @@ def run_dir(campaign_dir: Path, identifier: str) -> Path:
 
 
 def _pid_alive(pid: int) -> bool:
+    """True for a live process; a zombie (killed, not yet reaped by init) counts as dead."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         return True
-    return True
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state not in ("Z", "X")
 
 
 def status(directory: Path) -> str:

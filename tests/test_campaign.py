@@ -1,0 +1,148 @@
+"""Campaigns on real engines: a 2 × 3 grid, resuming, SIGKILL in the middle, failures, Dask."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from orchestrator.campaign import store
+from orchestrator.campaign.execute import run_campaign
+from orchestrator.campaign.spec import CampaignSpec, design_points, evaluate, expand, load_campaign
+from orchestrator.case import CaseError
+from orchestrator.results import read_results
+
+from conftest import requires_liggghts
+
+REPO = Path(__file__).resolve().parent.parent
+BASE = REPO / "cases" / "free_fall.yaml"
+
+
+def write_campaign(directory: Path, designs: list[dict], **extra: object) -> Path:
+    """A campaign over the free-fall case shortened to 0.05 s (≈ 0.3 s per LIGGGHTS run)."""
+    base = yaml.safe_load(BASE.read_text())
+    base["time"]["duration"] = 0.05
+    base_path = directory / "base.yaml"
+    base_path.write_text(yaml.safe_dump(base))
+    path = directory / "campaign.yaml"
+    path.write_text(yaml.safe_dump({"name": "grid", "base": "base.yaml", "designs": designs, **extra}))
+    return path
+
+
+GRID = [{"kind": "grid", "parameters": {"bodies.spheres.0.velocity": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], "gravity.2": [-9.81, -5.0, -1.0]}}]
+
+
+def test_designs_expand_as_documented(tmp_path: Path) -> None:
+    spec, base = load_campaign(write_campaign(tmp_path, GRID, replicates=2, derived={"contacts.0.kt_over_kn": "contacts.0.mu * 0.5"}))
+    expanded = expand(spec, base)
+    assert len(expanded) == 2 * 3 * 2
+    assert len({store.run_id(case) for _, case in expanded}) == 12  # replicates differ by seed
+    assert all(case.contacts[0].kt_over_kn == pytest.approx(0.25) for _, case in expanded)
+    lhs = design_points(CampaignSpec.model_validate({"name": "x", "base": "b", "designs": [{"kind": "lhs", "samples": 10, "ranges": {"a": [0, 1], "b": [5, 6]}}]}).designs[0])
+    assert len(lhs) == 10 and all(0 <= p["a"] <= 1 and 5 <= p["b"] <= 6 for p in lhs)
+    # Latin hypercube: one sample in each tenth of each range.
+    assert sorted(int(p["a"] * 10) for p in lhs) == list(range(10))
+
+
+def test_derived_expressions_are_arithmetic_only() -> None:
+    data = {"contacts": [{"kn": 2.0}]}
+    assert evaluate("contacts.0.kn * 3 + 1", data) == 7.0
+    with pytest.raises(CaseError):
+        evaluate("__import__('os').system('true')", data)
+
+
+def test_unknown_parameter_path_is_a_clear_error(tmp_path: Path) -> None:
+    spec, base = load_campaign(write_campaign(tmp_path, [{"kind": "grid", "parameters": {"contacts.0.mew": [0.1]}}]))
+    with pytest.raises(CaseError, match=r"has no 'contacts.0.mew'"):
+        expand(spec, base)
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_grid_completes_then_resumes_exactly(tmp_path: Path) -> None:
+    campaign = write_campaign(tmp_path, GRID)
+    out = tmp_path / "out"
+    first = run_campaign(campaign, out, jobs=2)
+    assert (first.done, first.failed, first.skipped) == (6, 0, 0)
+    index = pd.read_parquet(out / "index.parquet")
+    assert len(index) == 6 and set(index["status"]) == {"completed"}
+    # Final vertical speed = g t for each gravity of the grid: the runs are the cases they claim.
+    for _, row in index.iterrows():
+        velocity = read_results(store.run_dir(out, row["run_id"]) / "results.h5").velocity[-1, 0, 2]
+        assert velocity == pytest.approx(row["param.gravity.2"] * 0.05, rel=1e-6)
+    again = run_campaign(campaign, out, jobs=2)
+    assert (again.done, again.skipped) == (0, 6)
+    victim = index["run_id"].iloc[3]
+    (store.run_dir(out, victim) / "results.h5").unlink()
+    third = run_campaign(campaign, out, jobs=2)
+    assert (third.done, third.skipped) == (1, 5)
+    assert store.status(store.run_dir(out, victim)) == "completed"
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_a_crashing_run_is_recorded_and_the_others_complete(tmp_path: Path) -> None:
+    # A 1 mm domain: the sphere leaves it at once and LIGGGHTS loses it.
+    designs = [{"kind": "zip", "parameters": {"domain": [None, {"lower": [-0.1, -0.1, 0.999], "upper": [0.1, 0.1, 1.1]}]}}]
+    campaign = write_campaign(tmp_path, designs)
+    counts = run_campaign(campaign, tmp_path / "out", jobs=2)
+    assert (counts.done, counts.failed) == (1, 1)
+    index = pd.read_parquet(tmp_path / "out" / "index.parquet")
+    failed = index[index["status"] == "failed"].iloc[0]
+    assert "left the simulation domain" in failed["error"]
+    import json
+
+    record = json.loads((store.run_dir(tmp_path / "out", failed["run_id"]) / "run.json").read_text())
+    assert record["log_tail"], "a failed run keeps its log tail"
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_sigkill_in_the_middle_then_relaunch(tmp_path: Path) -> None:
+    """Kill the campaign process with SIGKILL mid-way; the relaunch finishes without duplicates."""
+    designs = [{"kind": "grid", "parameters": {"gravity.2": [-9.81, -9.0, -8.0, -7.0, -6.0, -5.0, -4.0, -3.0]}}]
+    campaign = write_campaign(tmp_path, designs)
+    base = yaml.safe_load((tmp_path / "base.yaml").read_text())
+    base["time"]["duration"] = 0.3  # ≈ 1 s per run, so the kill lands mid-campaign
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "orchestrator.cli", "campaign", "run", str(campaign), "-o", str(out), "-j", "2"]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=REPO)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        done = [d for d in (out / "runs").glob("*") if store.status(d) == "completed"] if (out / "runs").exists() else []
+        if len(done) >= 2:
+            break
+        time.sleep(0.05)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    time.sleep(0.5)  # let the kernel deliver PR_SET_PDEATHSIG to workers and engines
+    finished_before = {d.name: (d / "results.h5").stat().st_mtime_ns for d in (out / "runs").glob("*") if store.status(d) == "completed"}
+    assert 2 <= len(finished_before) < 8
+    counts = run_campaign(campaign, out, jobs=2)
+    assert counts.skipped == len(finished_before)
+    assert counts.done + counts.skipped == 8 and counts.failed == 0
+    runs = list((out / "runs").glob("*"))
+    assert len(runs) == 8 and all(store.status(d) == "completed" for d in runs)  # no duplicates
+    for name, mtime in finished_before.items():
+        assert (out / "runs" / name / "results.h5").stat().st_mtime_ns == mtime  # untouched
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_dask_local_cluster_gives_the_same_results(tmp_path: Path) -> None:
+    campaign = write_campaign(tmp_path, GRID)
+    run_campaign(campaign, tmp_path / "pool", jobs=2)
+    run_campaign(campaign, tmp_path / "dask", jobs=2, executor="dask")
+    pool = pd.read_parquet(tmp_path / "pool" / "index.parquet").set_index("run_id").sort_index()
+    dask = pd.read_parquet(tmp_path / "dask" / "index.parquet").set_index("run_id").sort_index()
+    assert list(pool.index) == list(dask.index)  # the same content-addressed runs
+    metrics = [c for c in pool.columns if c.startswith("metric.")]
+    pd.testing.assert_frame_equal(pool[metrics], dask[metrics], rtol=0, atol=0)
