@@ -265,6 +265,24 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
         sys.exit(3)
 
 
+@campaign.command("calibrate")
+@click.argument("calibration_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Calibration directory (default runs/calibrations/NAME).")
+def campaign_calibrate(calibration_file: Path, output: Path | None) -> None:
+    """Fit contact parameters to measured launches (E2 corner error); resumable, history kept."""
+    from .campaign.calibrate import calibrate, load_calibration
+
+    try:
+        spec_name = Path(calibration_file).stem
+        directory = output or Path("runs") / "calibrations" / spec_name
+        with console.status("calibrating (each evaluation is a real engine run)"):
+            result = calibrate(load_calibration(calibration_file, directory))
+    except CaseError as error:
+        _fail(str(error))
+    console.print_json(json.dumps(result))
+    console.print(f"history: {directory / 'history.jsonl'}  plot: {directory / 'convergence.png'}")
+
+
 @campaign.command("status")
 @click.argument("campaign_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def campaign_status(campaign_dir: Path) -> None:
