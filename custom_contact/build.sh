@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Builds libdemorch_bilinear.so against Debian's libliggghts-dev headers into $1 (an empty dir).
+# Usage: build.sh OUTPUT_DIR   (called by orchestrator/contact_build.py, which caches the result)
+set -euo pipefail
+out="$1"
+here="$(cd "$(dirname "$0")" && pwd)"
+inc=/usr/include/liggghts
+[ -f "$inc/granular_styles.h" ] || { echo "missing LIGGGHTS headers: apt-get install libliggghts-dev" >&2; exit 2; }
+mpi_inc="$(mpicxx --showme:compile 2>/dev/null || true)"
+[ -n "$mpi_inc" ] || { echo "missing MPI compiler wrapper: apt-get install mpi-default-dev" >&2; exit 2; }
+gen="$out/generated"
+mkdir -p "$gen"
+# The dev package lacks the generated style headers: list every installed model header, plus ours.
+for kind in normal tangential cohesion rolling surface; do
+  {
+    for header in "$inc"/${kind}_model_*.h; do
+      name="$(basename "$header")"
+      case "$name" in *_base.h) continue ;; esac
+      echo "#include \"$name\""
+    done
+    [ "$kind" = normal ] && echo '#include "normal_model_bilinear.h"'
+  } > "$gen/style_${kind}_model.h"
+done
+# The pair/wall variants this plugin provides (model, tangential, cohesion, rolling, surface).
+cat > "$gen/style_contact_model.h" <<'LIST'
+GRAN_MODEL(BILINEAR, TANGENTIAL_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT)
+GRAN_MODEL(BILINEAR, TANGENTIAL_NO_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT)
+LIST
+# Debian's flags: no SUPERQUADRIC_ACTIVE_FLAG / NONSPHERICAL_ACTIVE_FLAG.
+g++ -O2 -fPIC -shared -std=c++11 -w -DOMPI_SKIP_MPICXX -DMPICH_SKIP_MPICXX \
+  -I"$gen" -I"$here" -I"$inc" $mpi_inc \
+  "$here/plugin.cpp" -o "$out/libdemorch_bilinear.so" -lliggghts
+echo "built $out/libdemorch_bilinear.so"

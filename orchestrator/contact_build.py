@@ -1,0 +1,100 @@
+"""Build and cache the LIGGGHTS bilinear contact plugin (custom_contact/), outside the clone.
+
+Cache: ${DEMORCH_CACHE:-${XDG_CACHE_HOME:-~/.cache}/dem-orchestrator}/contact/<key>/, key = sha256 of
+the C++ sources, the build script and the installed liggghts package version. A build happens in a
+temporary directory renamed into place, so a crashed build never leaves a half-made cache entry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable
+
+SOURCE_DIR = Path(__file__).resolve().parent.parent / "custom_contact"
+SOURCES = ("normal_model_bilinear.h", "plugin.cpp", "build.sh")
+LIBRARY = "libdemorch_bilinear.so"
+
+
+class ContactBuildError(RuntimeError):
+    """The plugin could not be built; the message holds the compiler's output tail."""
+
+
+def cache_root() -> Path:
+    if "DEMORCH_CACHE" in os.environ:
+        return Path(os.environ["DEMORCH_CACHE"])
+    base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+    return base / "dem-orchestrator"
+
+
+def engine_version() -> str:
+    try:
+        result = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "liggghts"], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return "unknown"
+    return result.stdout.strip() or "unknown"
+
+
+def source_hash() -> str:
+    digest = hashlib.sha256()
+    for name in SOURCES:
+        digest.update(name.encode())
+        digest.update((SOURCE_DIR / name).read_bytes())
+    return digest.hexdigest()
+
+
+def build_key() -> str:
+    return hashlib.sha256(f"{source_hash()}|{engine_version()}".encode()).hexdigest()[:16]
+
+
+def plugin_path() -> Path:
+    return cache_root() / "contact" / build_key() / LIBRARY
+
+
+def ensure_plugin(force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
+    """Path of the built plugin, building it first when the cache has none for this source and engine."""
+    target = plugin_path()
+    if target.exists() and not force:
+        return target
+    final_dir = target.parent
+    final_dir.parent.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    if progress:
+        progress(f"building the bilinear contact plugin into {final_dir} ...")
+    with tempfile.TemporaryDirectory(dir=final_dir.parent, prefix=".build-") as scratch:
+        result = subprocess.run(["bash", str(SOURCE_DIR / "build.sh"), scratch], capture_output=True, text=True)
+        if result.returncode != 0 or not (Path(scratch) / LIBRARY).exists():
+            tail = "\n".join((result.stdout + result.stderr).strip().splitlines()[-25:])
+            raise ContactBuildError(
+                "building the bilinear contact plugin failed (needs: apt-get install libliggghts-dev mpi-default-dev g++):\n" + tail
+            )
+        (Path(scratch) / "build.log").write_text(result.stdout + result.stderr)
+        if final_dir.exists():
+            shutil.rmtree(final_dir)
+        os.replace(scratch, final_dir)
+        os.makedirs(scratch, exist_ok=True)  # TemporaryDirectory cleans up a path that must exist
+    if progress:
+        progress(f"built in {time.perf_counter() - started:.1f} s")
+    return target
+
+
+def plugin_status() -> dict[str, object]:
+    target = plugin_path()
+    return {
+        "built": target.exists(),
+        "path": str(target),
+        "key": target.parent.name,
+        "source_hash": source_hash()[:16],
+        "engine_version": engine_version(),
+    }
+
+
+def liggghts_env(plugin: Path) -> dict[str, str]:
+    """Environment additions that make `liggghts` load the plugin."""
+    preload = os.environ.get("LD_PRELOAD", "")
+    return {"LD_PRELOAD": f"{plugin}:{preload}" if preload else str(plugin)}
