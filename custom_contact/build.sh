@@ -21,13 +21,10 @@ for kind in normal tangential cohesion rolling surface; do
     [ "$kind" = normal ] && echo '#include "normal_model_bilinear.h"'
   } > "$gen/style_${kind}_model.h"
 done
-# The pair/wall variants this plugin provides (model, tangential, cohesion, rolling, surface).
-cat > "$gen/style_contact_model.h" <<'LIST'
-GRAN_MODEL(BILINEAR, TANGENTIAL_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT)
-GRAN_MODEL(BILINEAR, TANGENTIAL_NO_HISTORY, COHESION_OFF, ROLLING_OFF, SURFACE_DEFAULT)
-LIST
+# granular_styles.h includes this list; the plugin registers its variants itself (plugin.cpp).
+: > "$gen/style_contact_model.h"
 # Debian's flags: no SUPERQUADRIC_ACTIVE_FLAG / NONSPHERICAL_ACTIVE_FLAG.
-g++ -O2 -fPIC -shared -std=c++11 -w -DOMPI_SKIP_MPICXX -DMPICH_SKIP_MPICXX \
+g++ -O2 -fPIC -shared -std=c++11 -w -fvisibility=hidden -fvisibility-inlines-hidden -DOMPI_SKIP_MPICXX -DMPICH_SKIP_MPICXX \
   -I"$gen" -I"$here" -I"$inc" $mpi_inc \
   "$here/plugin.cpp" -o "$out/libdemorch_bilinear.so" -lliggghts
 echo "built $out/libdemorch_bilinear.so"
