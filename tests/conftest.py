@@ -42,12 +42,12 @@ def slope_vectors(angle_deg: float) -> tuple[tuple[float, ...], tuple[float, ...
     return (math.cos(a), 0.0, -math.sin(a)), (math.sin(a), 0.0, math.cos(a))
 
 
-def sliding_case(engine: str, angle_deg: float = 30.0, mu: float = 0.2, duration: float = 0.25) -> Case:
+def sliding_case(engine: str, angle_deg: float = 30.0, mu: float = 0.2, duration: float = 0.25, law: str = "linear") -> Case:
     """A sphere that cannot rotate, resting on an inclined rectangle: it slides like a block."""
     down, normal = slope_vectors(angle_deg)
     radius = 0.005
     start = tuple(0.05 * d + radius * n for d, n in zip(down, normal))
-    contact = {"en2": 0.5, "mu": mu, "kn": 1e5, "kt_over_kn": 0.4}
+    contact = {"law": law, "en2": 0.5, "mu": mu, "kn": 1e5, "kt_over_kn": 0.4}
     return parse_case(
         {
             "name": "slide",

@@ -16,10 +16,11 @@ from conftest import engine_params, slope_vectors, sliding_case
 MU = 0.46  # brick/support, Richefeu et al. (2012)
 
 
+@pytest.mark.parametrize("law", ["linear", "bilinear"])
 @pytest.mark.parametrize("engine", engine_params())
-def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, tmp_path: Path) -> None:
+def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, law: str, tmp_path: Path) -> None:
     angle = math.degrees(math.atan(MU - 0.02))
-    run_case(sliding_case(engine, angle, MU, duration=0.3), tmp_path, tmp_path / "run")
+    run_case(sliding_case(engine, angle, MU, duration=0.3, law=law), tmp_path, tmp_path / "run")
     trajectory = read_results(tmp_path / "run" / RESULTS)
     down, _ = slope_vectors(angle)
     travel = (trajectory.position[-1, 0] - trajectory.position[0, 0]) @ np.asarray(down)
@@ -29,10 +30,11 @@ def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, tmp_path: Path) ->
     assert np.linalg.norm(trajectory.velocity[-1, 0]) < 1e-4
 
 
+@pytest.mark.parametrize("law", ["linear", "bilinear"])
 @pytest.mark.parametrize("engine", engine_params())
-def test_block_slides_with_kinetic_acceleration_above_mu(engine: str, tmp_path: Path) -> None:
+def test_block_slides_with_kinetic_acceleration_above_mu(engine: str, law: str, tmp_path: Path) -> None:
     angle = math.degrees(math.atan(MU + 0.05))
-    run_case(sliding_case(engine, angle, MU, duration=0.3), tmp_path, tmp_path / "run")
+    run_case(sliding_case(engine, angle, MU, duration=0.3, law=law), tmp_path, tmp_path / "run")
     trajectory = read_results(tmp_path / "run" / RESULTS)
     down, _ = slope_vectors(angle)
     speed = trajectory.velocity[:, 0, :] @ np.asarray(down)

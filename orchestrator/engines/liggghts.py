@@ -159,6 +159,11 @@ class LiggghtsAdapter:
     def command(self, deck: Path) -> list[str]:
         executable = require_executable(self.executable, INSTALL_HINT)
         base = [executable, "-echo", "screen", "-in", deck.name]  # echo: the log shows the failing command
+        # LIGGGHTS prints its ERROR line and then calls MPI_Abort: with a block-buffered pipe the
+        # message is lost. Line buffering (stdbuf, coreutils) keeps it in the log.
+        stdbuf = shutil.which("stdbuf")
+        if stdbuf:
+            base = [stdbuf, "-oL", "-eL", *base]
         if self.mpi_processes > 1:
             mpirun = require_executable("mpirun", "apt-get install -y openmpi-bin")
             return [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(self.mpi_processes), *base]
