@@ -1,14 +1,13 @@
 """An avalanche study: pack bricks in the release box, open the trap, measure the deposit and front.
 
-A study file (YAML) holds the geometry, the brick, the packing and the contacts; it expands into two
-ordinary cases run one after the other: `packing` (trap closed, bricks rained or stacked, settled)
-and `release` (the packed bricks, trap removed). The packing is stored with a hash of everything
-that shaped it and reused by any later study with the same packing inputs.
+A study file (YAML) holds the geometry, the brick, the packing and the contacts; it expands into one
+ordinary case: bricks rained (or stacked) into the box with the trap closed, settled for
+`packing.settle_time`, then the trap wall is removed (`remove_at`) and the mass flows for
+`release.duration`. Metrics use the frames from the opening on.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import tomllib
@@ -127,20 +126,34 @@ def _contacts(study: AvalancheStudy, brick_brick_mu: float | None = None) -> lis
     ]
 
 
-def _case(study: AvalancheStudy, stage: str, positions: np.ndarray, orientations: np.ndarray, walls: list[dict[str, Any]], duration: float, interval: float, brick_brick_mu: float | None = None) -> Case:
+def study_case(study: AvalancheStudy) -> Case:
+    """The whole study as one case: rain (or stack) into the closed box, settle, open the trap, flow."""
+    geometry, brick, count = study.geometry.build(), study.brick.build(), study.brick_count
+    if study.packing.kind == "random_pour":
+        # 3 mm between cells: LIGGGHTS places each clump within 1 mm of where it is asked to.
+        positions, orientations = rain_positions(geometry, brick, count, study.seed, gap=0.003)
+        height = max(geometry.box_height, rain_height(geometry, brick, count, gap=0.003))
+    else:
+        gap = 0.0025 if study.engine is Engine.liggghts else 0.0005  # LIGGGHTS places within 1 mm
+        positions, orientations = ordered_pile(geometry, brick, count, gap=gap)
+        height = max(geometry.box_height, (count // max(1, int(geometry.box_depth // (brick.length + gap)) * int(geometry.box_width // (brick.width + gap))) + 1) * (brick.thickness + gap) + gap)
+    walls = geometry.walls(trap_closed=True, wall_height=height)
+    for wall in walls:
+        if wall["name"] == "trap":
+            wall["remove_at"] = study.packing.settle_time
     spec = study.brick
     return parse_case(
         {
-            "name": f"{study.name}_{stage}",
+            "name": study.name,
             "engine": study.engine.value,
             "seed": study.seed,
-            "time": {"duration": duration, "output_interval": interval},
+            "time": {"duration": study.packing.settle_time + study.release.duration, "output_interval": study.release.output_interval},
             "materials": [
                 {"name": "brick", "density": spec.density},
                 {"name": "board", "density": 1400.0},
                 {"name": "box", "density": 1400.0},
             ],
-            "contacts": _contacts(study, brick_brick_mu),
+            "contacts": _contacts(study, study.packing.brick_brick_mu),
             "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout)}],
             "bodies": {
                 "clumps": [
@@ -150,31 +163,13 @@ def _case(study: AvalancheStudy, stage: str, positions: np.ndarray, orientations
             },
             "walls": walls,
         },
-        source=f"{study.name} ({stage})",
+        source=f"study {study.name}",
     )
 
 
-def packing_case(study: AvalancheStudy) -> Case:
-    """Bricks rained (or stacked) into the closed box; its walls reach above the rain grid."""
-    geometry, brick, count = study.geometry.build(), study.brick.build(), study.brick_count
-    if study.packing.kind == "random_pour":
-        positions, orientations = rain_positions(geometry, brick, count, study.seed)
-        height = max(geometry.box_height, rain_height(geometry, brick, count))
-    else:
-        positions, orientations = ordered_pile(geometry, brick, count)
-        height = geometry.box_height
-    walls = geometry.walls(trap_closed=True, wall_height=height)
-    return _case(study, "packing", positions, orientations, walls, study.packing.settle_time, study.packing.settle_time / 10, study.packing.brick_brick_mu)
-
-
-def packing_key(study: AvalancheStudy) -> str:
-    """Hash of everything that shapes the packing: reuse is safe when it matches."""
-    relevant = {k: study.model_dump(mode="json")[k] for k in ("engine", "seed", "geometry", "brick", "contacts", "packing")}
-    return hashlib.sha256(json.dumps(relevant, sort_keys=True).encode()).hexdigest()[:16]
-
-
-def final_state(trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
-    return trajectory.position[-1], trajectory.orientation[-1]
+def release_frame(trajectory: Trajectory, study: AvalancheStudy) -> int:
+    """Index of the frame at which the trap opens."""
+    return int(np.argmin(np.abs(trajectory.time - study.packing.settle_time)))
 
 
 def run_study(
@@ -182,46 +177,52 @@ def run_study(
     outdir: Path,
     progress: Callable[[str], Callable[[float, float], None] | None] | None = None,
 ) -> dict[str, Any]:
-    """Pack (or reuse the packing), release, and measure. Returns the report dictionary."""
+    """Run the study (or reuse a finished run in outdir/run) and measure it. Returns the report."""
     outdir.mkdir(parents=True, exist_ok=True)
     geometry, brick = study.geometry.build(), study.brick.build()
-    packing_dir = outdir / f"packing-{packing_key(study)}"
-    if not (packing_dir / RESULTS).exists():
-        run_case(packing_case(study), outdir, packing_dir, progress=progress("packing") if progress else None)
-    packed = read_results(packing_dir / RESULTS)
-    positions, orientations = final_state(packed)
-    inside = np.isfinite(positions).all(axis=1)
-    density = apparent_density(geometry, positions[inside], orientations[inside], brick)
-    release = _case(study, "release", positions[inside], orientations[inside], geometry.walls(trap_closed=False), study.release.duration, study.release.output_interval)
-    release_dir = outdir / "release"
-    if not (release_dir / RESULTS).exists():
-        run_case(release, outdir, release_dir, progress=progress("release") if progress else None)
-    trajectory = read_results(release_dir / RESULTS)
-    report = measure(trajectory, brick)
-    report["packing"] = {"bricks": int(inside.sum()), "apparent_density": density, "target_apparent_density": study.target_density, "directory": packing_dir.name}
+    rundir = outdir / "run"
+    if not (rundir / RESULTS).exists():
+        run_case(study_case(study), outdir, rundir, progress=progress("avalanche") if progress else None)
+    trajectory = read_results(rundir / RESULTS)
+    opening = release_frame(trajectory, study)
+    packed = trajectory.position[opening]
+    inside = np.isfinite(packed).all(axis=1)
+    density = apparent_density(geometry, packed[inside], trajectory.orientation[opening][inside], brick)
+    report = measure(trajectory, brick, first_frame=opening)
+    report["packing"] = {"bricks": int(inside.sum()), "apparent_density": density, "target_apparent_density": study.target_density}
+    report["study"] = study.model_dump(mode="json")
     (outdir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     return report
 
 
-def measure(trajectory: Trajectory, brick: BrickClump) -> dict[str, Any]:
-    """Deposit metrics on the last frame and the front curve on the flat board (x ≥ 0)."""
-    metrics = deposit.deposit_metrics(trajectory.position[0], trajectory.position[-1], trajectory.mass, trajectory.radius)
+def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0) -> dict[str, Any]:
+    """Deposit metrics on the last frame and the front curve from `first_frame` (the trap opening) on."""
+    metrics = deposit.deposit_metrics(trajectory.position[first_frame], trajectory.position[-1], trajectory.mass, trajectory.radius)
     # At least 1 % of the mass and at least three bricks must stand at the front.
     share = max(0.01, 3.0 / trajectory.n_bodies)
-    position, velocity = front.front_curve(trajectory.time, trajectory.position[:, :, 0], trajectory.mass, window=2 * brick.length, min_fraction=share)
+    time = trajectory.time[first_frame:] - trajectory.time[first_frame]
+    position, velocity = front.front_curve(time, trajectory.position[first_frame:, :, 0], trajectory.mass, window=2 * brick.length, min_fraction=share)
     on_flat = position >= 0.0
     return {
         "deposit": metrics.as_dict(),
         "front": {
-            "time": trajectory.time.tolist(),
+            "time": time.tolist(),
             "position": position.tolist(),
             "velocity": velocity.tolist(),
             "max_velocity": float(np.nanmax(velocity)),
             "max_velocity_on_flat": float(np.nanmax(velocity[on_flat])) if on_flat.any() else float("nan"),
             "final_position": float(position[-1]),
         },
-        "at_rest": bool(np.nanmax(np.linalg.norm(trajectory.velocity[-1], axis=1)) < 0.01),
+        "kinetic_to_released_energy": released_ratio(trajectory, first_frame),
     }
+
+
+def released_ratio(trajectory: Trajectory, first_frame: int) -> float:
+    """Kinetic energy at the end over the potential energy released since `first_frame`: ~0 when stopped."""
+    from .metrics import kinetic_energy
+
+    released = 9.81 * float(np.nansum(trajectory.mass * (trajectory.position[first_frame, :, 2] - trajectory.position[-1, :, 2])))
+    return float(kinetic_energy(trajectory)[-1] / released) if released > 0 else float("nan")
 
 
 def load_reference() -> dict[str, Any]:

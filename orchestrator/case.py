@@ -58,7 +58,9 @@ class TimeSettings(Strict):
     """Time integration. `step: auto` derives Δt from the stiffest contact and the lightest body."""
 
     step: Union[Literal["auto"], float] = "auto"
-    safety_factor: Real(gt=0.0, le=0.5) = 0.02
+    # 100 steps per shortest contact. Measured: at 0.02 a 50-brick pile under the bilinear law kept
+    # ~1e-6 of its energy drop as stepping noise after 1 s (LIGGGHTS); at 0.01, 1e-9.
+    safety_factor: Real(gt=0.0, le=0.5) = 0.01
     duration: Real(gt=0.0, le=1e4)
     output_interval: Real(gt=0.0, le=1e4)
 
@@ -162,6 +164,7 @@ class RectangleWall(Strict):
     origin: Vec3
     edge1: Vec3
     edge2: Vec3
+    remove_at: Real(gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
 
     @model_validator(mode="after")
     def _not_degenerate(self) -> "RectangleWall":
@@ -181,6 +184,7 @@ class MeshWall(Strict):
     material: Name
     file: Annotated[str, Field(min_length=1, max_length=4096)]
     scale: Real(gt=0.0, le=1e6) = 1.0
+    remove_at: Real(gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
 
     @field_validator("file")
     def _stl_suffix(cls, value: str) -> str:
@@ -255,6 +259,9 @@ class Case(Strict):
         wall_names = [w.name for w in self.walls]
         if len(set(wall_names)) != len(wall_names):
             raise ValueError("walls: names must be unique")
+        for i, wall in enumerate(self.walls):
+            if wall.remove_at is not None and wall.remove_at >= self.time.duration:
+                raise ValueError(f"walls.{i}.remove_at: must be before the end of the run ({self.time.duration} s)")
         if self.time.output_interval > self.time.duration:
             raise ValueError("time.output_interval: must not exceed time.duration")
         return self

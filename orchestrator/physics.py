@@ -162,8 +162,9 @@ def time_step(case: Case) -> float:
     """The case's Δt: given, or safety_factor × the shortest contact duration over touching pairs.
 
     The shortest duration uses the lightest body of each material and the loading stiffness k_n
-    (for the bilinear law the unloading branch is softer, hence slower). A safety factor of 0.02
-    resolves one contact with 50 steps, the usual DEM practice for explicit integration.
+    (for the bilinear law the unloading branch is softer, hence slower); a clump's mass is divided
+    by the spheres on its largest face. The default safety factor 0.01 resolves that contact with
+    100 steps: 50 (a common DEM choice) left a brick pile's kinetic energy at 1e-6 of its drop.
     """
     if case.time.step != "auto":
         return float(case.time.step)
@@ -190,6 +191,15 @@ class Schedule:
     @property
     def end_time(self) -> float:
         return self.total_steps * self.dt
+
+
+def removal_steps(case: Case, plan: "Schedule") -> dict[str, int]:
+    """Wall name → step at which it is removed, rounded to a whole output interval (frames stay aligned)."""
+    return {
+        wall.name: max(1, round(wall.remove_at / (plan.output_every * plan.dt))) * plan.output_every
+        for wall in case.walls
+        if wall.remove_at is not None
+    }
 
 
 def schedule(case: Case) -> Schedule:

@@ -32,11 +32,11 @@ def test_linear_damping_gives_the_requested_restitution(en2: float) -> None:
     assert rebound**2 == pytest.approx(en2, rel=1e-6)
 
 
-def test_auto_time_step_is_a_fiftieth_of_the_contact_duration() -> None:
+def test_auto_time_step_is_a_hundredth_of_the_contact_duration() -> None:
     case = sliding_case("liggghts")
     mass = 2500.0 * 4 / 3 * math.pi * 0.005**3
     plan = schedule(case)
     # The sphere/sphere pair (reduced mass m/2) is the shortest contact, though only one sphere exists.
-    assert plan.dt == pytest.approx(0.02 * contact_duration(1e5, mass / 2))
+    assert plan.dt == pytest.approx(0.01 * contact_duration(1e5, mass / 2))
     assert plan.total_steps == plan.frames * plan.output_every
     assert plan.end_time >= case.time.duration

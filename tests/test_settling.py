@@ -44,7 +44,7 @@ def pile_case(engine: str, count: int = 50, duration: float = 1.0) -> Case:
     )
 
 
-@pytest.mark.parametrize("engine", [p for p in engine_params() if p.values[0] == "yade"])
+@pytest.mark.parametrize("engine", engine_params())
 def test_fifty_bricks_settle_without_damping(engine: str, tmp_path: Path) -> None:
     run_case(pile_case(engine), tmp_path, tmp_path / "run")
     trajectory = read_results(tmp_path / "run" / RESULTS)

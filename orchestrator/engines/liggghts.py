@@ -22,7 +22,6 @@ DUMP_NAME = "frames.dump"
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
 
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)\s*$")
-_DUMP_COLUMNS = ["id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz"]
 
 
 def _package_version(package: str) -> str | None:
@@ -47,6 +46,82 @@ def id_ranges(ids: list[int]) -> str:
     return " ".join(parts)
 
 
+PLACEMENT_RADIUS = 1e-3  # m: insert/pack needs a region of some volume (1e-4 m fails); see README
+
+
+def primes_above(start: int, count: int) -> list[int]:
+    """LIGGGHTS random seeds must be primes above 10000."""
+    found: list[int] = []
+    candidate = start + 1
+    while len(found) < count:
+        if all(candidate % d for d in range(2, int(candidate**0.5) + 1)):
+            found.append(candidate)
+        candidate += 1
+    return found
+
+
+def _sphere_radii(case: Case) -> list[float]:
+    radii = [s.radius for s in case.bodies.spheres]
+    radii += [case.shape(c.shape).clump(case.material(c.material).density).radius for c in case.bodies.clumps]
+    return radii
+
+
+def _numbers(values: object) -> str:
+    return " ".join(repr(float(v)) for v in values)  # type: ignore[union-attr]
+
+
+def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
+    """Template data for clumps: multisphere templates per (shape, material) and one insertion per clump."""
+    if not case.bodies.clumps:
+        return {"clump_templates": [], "clumps": [], "placement_radius": PLACEMENT_RADIUS}
+    kinds = sorted({(c.shape, c.material) for c in case.bodies.clumps})
+    seeds = primes_above(10000 + case.seed % 100000, 2 * len(kinds) + len(case.bodies.clumps))
+    templates = {}
+    for index, (shape_name, material) in enumerate(kinds):
+        brick = case.shape(shape_name).clump(case.material(material).density)
+        spheres = " ".join(f"{_numbers(c)} {brick.radius!r}" for c in brick.centres)
+        ixx, iyy, izz = (float(v) for v in brick.principal_inertia)
+        templates[(shape_name, material)] = {
+            "template": f"template_{index + 1}",
+            "distribution": f"distribution_{index + 1}",
+            "seed": seeds[2 * index],
+            "seed2": seeds[2 * index + 1],
+            "type": types[material],
+            "density": case.material(material).density,
+            "n": brick.n_spheres,
+            "spheres": spheres,
+            "multisphere_type": index + 1,
+            "mass": brick.mass,
+            "inertia": f"{ixx!r} 0.0 0.0 {iyy!r} 0.0 {izz!r}",
+        }
+    clumps = [
+        {
+            "position": _numbers(c.position),
+            "orientation": _numbers(c.orientation),
+            "velocity": _numbers(c.velocity),
+            "angular_velocity": _numbers(c.angular_velocity),
+            "distribution": templates[(c.shape, c.material)]["distribution"],
+            "seed": seeds[2 * len(kinds) + i],
+        }
+        for i, c in enumerate(case.bodies.clumps)
+    ]
+    return {"clump_templates": list(templates.values()), "clumps": clumps, "placement_radius": PLACEMENT_RADIUS}
+
+
+def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
+    """Consecutive `run` lengths, each followed by the walls removed at its end."""
+    removals = physics.removal_steps(case, plan)
+    remaining = [wall.name for wall in case.walls]
+    segments, done = [], 0
+    for step in sorted(set(removals.values())):
+        removed = [name for name, at in removals.items() if at == step]
+        remaining = [name for name in remaining if name not in removed]
+        segments.append({"steps": step - done, "remove": removed, "remaining": remaining})
+        done = step
+    segments.append({"steps": plan.total_steps - done, "remove": [], "remaining": remaining})
+    return segments
+
+
 class ThermoWatcher:
     """Reads thermo lines (step atoms ke): simulated time for progress, and the atom count."""
 
@@ -61,7 +136,8 @@ class ThermoWatcher:
         if not match:
             return None
         step, atoms, kinetic = int(match.group(1)), int(match.group(2)), match.group(3)
-        self.first_atoms = atoms if self.first_atoms is None else self.first_atoms
+        # The most atoms seen, not the first count: clumps are inserted after step 0.
+        self.first_atoms = atoms if self.first_atoms is None else max(self.first_atoms, atoms)
         self.last_atoms, self.last_step = atoms, step
         try:
             if not np.isfinite(float(kinetic)):
@@ -90,8 +166,8 @@ class LiggghtsAdapter:
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
         from ..render import render
 
-        if case.bodies.clumps:
-            raise CaseError("bodies.clumps: clumps are not yet supported on LIGGGHTS in this version; use engine: yade")
+        if case.bodies.clumps and case.bodies.spheres:
+            raise CaseError("bodies: LIGGGHTS runs either spheres or clumps in one case, not both; use engine: yade for a mix")
         prepared = common.prepare(case, case_dir)
         common.save_case(case, rundir)
         types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
@@ -115,15 +191,17 @@ class LiggghtsAdapter:
             "law": case.law.value,
             "data_file": DATA_NAME,
             "dump_file": DUMP_NAME,
-            "skin": float(max(s.radius for s in case.bodies.spheres)),
+            "skin": float(max(_sphere_radii(case))),
             "dt": prepared.schedule.dt,
             "gravity_magnitude": magnitude,
             "gravity_direction": [float(v) for v in direction],
             "walls": walls,
             "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
+            **clump_context(case, types),
             "output_every": prepared.schedule.output_every,
             "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
             "total_steps": prepared.schedule.total_steps,
+            "segments": run_segments(case, prepared.schedule),
         }
         deck = rundir / DECK_NAME
         deck.write_text(render("liggghts", "case.in.j2", context))
@@ -141,10 +219,11 @@ class LiggghtsAdapter:
             f"{lower[0]!r} {upper[0]!r} xlo xhi",
             f"{lower[1]!r} {upper[1]!r} ylo yhi",
             f"{lower[2]!r} {upper[2]!r} zlo zhi",
-            "",
-            "Atoms",
-            "",
         ]
+        if not case.bodies.spheres:  # clumps only: they are inserted by the deck
+            path.write_text("\n".join(lines) + "\n")
+            return
+        lines += ["", "Atoms", ""]
         for i, sphere in enumerate(case.bodies.spheres, start=1):
             density = case.material(sphere.material).density
             x, y, z = sphere.position
@@ -196,54 +275,99 @@ class LiggghtsAdapter:
         deck = rundir / DECK_NAME
         case = common.saved_case(rundir)
         dt = physics.schedule(case).dt
-        steps, frames = read_dump(rundir / DUMP_NAME)
+        steps, columns, frames = read_dump(rundir / DUMP_NAME)
         if not frames:
             raise EngineError("the engine wrote no dump frames", deck, rundir / "engine.log")
-        first = frames[0]
-        ids = first[:, 0].astype(np.int64)
-        column = {name: i for i, name in enumerate(_DUMP_COLUMNS)}
-        n_frames, n_bodies = len(frames), len(ids)
-        position = np.full((n_frames, n_bodies, 3), np.nan)
-        velocity = np.full_like(position, np.nan)
-        spin = np.full_like(position, np.nan)
-        index_of = {int(i): k for k, i in enumerate(ids)}
-        for f, rows in enumerate(frames):
-            slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
-            position[f, slots] = rows[:, column["x"] : column["z"] + 1]
-            velocity[f, slots] = rows[:, column["vx"] : column["vz"] + 1]
-            spin[f, slots] = rows[:, column["omegax"] : column["omegaz"] + 1]
+        column = {name: i for i, name in enumerate(columns)}
+        if "id_multisphere" in column:
+            position, velocity, spin, orientation = clump_states(case, column, frames)
+            ids = np.arange(1, len(case.bodies.clumps) + 1)
+        else:
+            ids = frames[0][:, 0].astype(np.int64)
+            position, velocity, spin = sphere_states(ids, column, frames)
+            orientation = np.full(position.shape[:2] + (4,), np.nan)
         return Trajectory(
             time=np.asarray(steps, dtype=float) * dt,
             ids=ids,
             material=common.body_materials(case),
             mass=common.body_masses(case),
-            radius=np.array([s.radius for s in case.bodies.spheres]),
+            radius=np.array([b.radius for b in physics.bodies(case)]),
             inertia=common.body_inertia(case),
             position=position,
             velocity=velocity,
             angular_velocity=spin,
-            orientation=np.full((n_frames, n_bodies, 4), np.nan),
-            attrs={"orientation_tracked": False},
+            orientation=orientation,
+            attrs={"orientation_tracked": "id_multisphere" in column},
         )
 
 
-def read_dump(path: Path) -> tuple[list[int], list[np.ndarray]]:
-    """Parse a `dump custom` text file into (steps, per-frame arrays in the dump's column order)."""
+def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(F, B, 3) position, velocity, spin of spheres by atom id; a lost atom is NaN from then on."""
+    position = np.full((len(frames), len(ids), 3), np.nan)
+    velocity, spin = position.copy(), position.copy()
+    index_of = {int(i): k for k, i in enumerate(ids)}
+    for f, rows in enumerate(frames):
+        slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
+        position[f, slots] = rows[:, column["x"] : column["z"] + 1]
+        velocity[f, slots] = rows[:, column["vx"] : column["vz"] + 1]
+        spin[f, slots] = rows[:, column["omegax"] : column["omegaz"] + 1]
+    return position, velocity, spin
+
+
+def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Body states from the per-sphere dump of multisphere clumps.
+
+    Centre: mean of the sphere centres (the layouts are symmetric about the brick centre). Velocity:
+    mean sphere velocity. Spin: the spheres carry their body's. Orientation: the rotation that best
+    maps the template's sphere centres onto the dumped ones (Kabsch, scipy align_vectors), as a
+    (w, x, y, z) quaternion of the brick frame. Bodies are matched to the case's clumps by their
+    nearest requested position in the first frame (insertion places them within 1 mm).
+    """
+    from scipy.spatial.transform import Rotation
+
+    clumps = case.bodies.clumps
+    templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
+    shape = (len(frames), len(clumps))
+    position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))
+    orientation = np.full(shape + (4,), np.nan)
+    requested = np.array([c.position for c in clumps])
+    slot_of: dict[int, int] = {}
+    for f, rows in enumerate(frames):
+        rows = rows[np.argsort(rows[:, 0], kind="stable")]  # atom id order = template sphere order
+        bodies = rows[:, column["id_multisphere"]].astype(np.int64)
+        for body in np.unique(bodies):
+            atoms = rows[bodies == body]
+            centre = atoms[:, column["x"] : column["z"] + 1].mean(axis=0)
+            if int(body) not in slot_of:
+                slot_of[int(body)] = int(np.argmin(np.linalg.norm(requested - centre, axis=1)))
+            k = slot_of[int(body)]
+            position[f, k] = centre
+            velocity[f, k] = atoms[:, column["vx"] : column["vz"] + 1].mean(axis=0)
+            spin[f, k] = atoms[0, column["omegax"] : column["omegaz"] + 1]
+            rotation, _ = Rotation.align_vectors(atoms[:, column["x"] : column["z"] + 1] - centre, templates[k])
+            x, y, z, w = rotation.as_quat()
+            orientation[f, k] = (w, x, y, z) if w >= 0 else (-w, -x, -y, -z)
+    return position, velocity, spin, orientation
+
+
+def read_dump(path: Path) -> tuple[list[int], list[str], list[np.ndarray]]:
+    """Parse a `dump custom` text file into (steps, column names, per-frame arrays); a cut-off last frame is dropped."""
     if not path.exists():
-        return [], []
+        return [], [], []
     steps: list[int] = []
     frames: list[np.ndarray] = []
-    text = path.read_text()
-    for block in text.split("ITEM: TIMESTEP\n")[1:]:
+    columns: list[str] = []
+    for block in path.read_text().split("ITEM: TIMESTEP\n")[1:]:
         parts = block.split("\n", 8)  # 8 header lines, then the rows
         if len(parts) < 9:
             break  # a frame cut short by a crash
-        step, count, columns = int(parts[0]), int(parts[2]), parts[7].split()[2:]
-        if columns != _DUMP_COLUMNS:
-            raise ValueError(f"{path}: unexpected dump columns {columns}")
+        step, count, names = int(parts[0]), int(parts[2]), parts[7].split()[2:]
+        if columns and names != columns:
+            raise ValueError(f"{path}: dump columns change between frames")
+        columns = names
         data = np.array(parts[8].split(), dtype=float)
         if data.size != count * len(columns):
             break  # incomplete last frame
         steps.append(step)
         frames.append(data.reshape(count, len(columns)))
-    return steps, frames
+    return steps, columns, frames

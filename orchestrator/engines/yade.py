@@ -59,9 +59,8 @@ class YadeAdapter:
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
         common.save_case(case, rundir)
-        wall_material = {wall.name: wall.material for wall in case.walls}
         facets = [
-            (wall_material[wall.name], *[tuple(float(c) for c in vertex) for vertex in triangle])
+            (wall.name, wall.material, *[tuple(float(c) for c in vertex) for vertex in triangle])
             for wall, triangles in zip(case.walls, prepared.wall_triangles)
             for triangle in triangles
         ]
@@ -91,6 +90,7 @@ class YadeAdapter:
             "spheres": spheres,
             "clumps": clumps,
             "facets": facets,
+            "removals": _removals(case, prepared.schedule),
         }
         script = rundir / SCRIPT_NAME
         script.write_text(render("yade", "case.py.j2", context))
@@ -127,6 +127,11 @@ class YadeAdapter:
             orientation=stack[:, :, 12:16],
             attrs={"orientation_tracked": True},
         )
+
+
+def _removals(case: Case, plan: physics.Schedule) -> list[tuple[int, list[str]]]:
+    steps = physics.removal_steps(case, plan)
+    return [(step, sorted(n for n, at in steps.items() if at == step)) for step in sorted(set(steps.values()))]
 
 
 def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
