@@ -105,4 +105,4 @@ def test_preset_studies_load_with_the_paper_brick_counts() -> None:
     presets = {p.stem: load_study(p) for p in sorted((Path(__file__).parent.parent / "cases" / "avalanche").glob("*.yaml"))}
     assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
     assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
-    assert presets["small"].brick_count == pytest.approx(630, rel=0.02)
+    assert presets["small"].brick_count == pytest.approx(95, rel=0.02)

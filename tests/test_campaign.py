@@ -114,12 +114,15 @@ def test_sigkill_in_the_middle_then_relaunch(tmp_path: Path) -> None:
     (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))
     out = tmp_path / "out"
     command = [sys.executable, "-m", "orchestrator.cli", "campaign", "run", str(campaign), "-o", str(out), "-j", "2"]
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=REPO)
+    stderr_path = tmp_path / "campaign.stderr"
+    with open(stderr_path, "w") as stderr:
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr, stdin=subprocess.DEVNULL, cwd=REPO)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         done = [d for d in (out / "runs").glob("*") if store.status(d) == "completed"] if (out / "runs").exists() else []
         if len(done) >= 2:
             break
+        assert process.poll() is None, f"the campaign ended before it could be killed:\n{stderr_path.read_text()[-2000:]}"
         time.sleep(0.05)
     os.kill(process.pid, signal.SIGKILL)
     process.wait()
