@@ -1,13 +1,15 @@
 """An avalanche study: pack bricks in the release box, open the trap, measure the deposit and front.
 
-A study file (YAML) holds the geometry, the brick, the packing and the contacts; it expands into one
-ordinary case: bricks rained (or stacked) into the box with the trap closed, settled for
-`packing.settle_time`, then the trap wall is removed (`remove_at`) and the mass flows for
-`release.duration`. Metrics use the frames from the opening on.
+A study file (YAML) holds the geometry, the brick, the packing and the contacts; it expands into two
+ordinary cases. The packing: bricks rained (or stacked) into the box with the trap closed and settled
+for `packing.settle_time`; it is content-addressed (the hash of its case) and stored once under a
+packings directory, so every study with the same packing inputs reuses it. The release: the packed
+bricks with the trap gone flow for `release.duration`; its time starts at the opening.
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import tomllib
@@ -16,13 +18,15 @@ from typing import Any, Callable, Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
 from . import deposit, front
 from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_height, rain_positions
 from .bricks import BrickClump
 from .case import Case, CaseError, Engine, Name, Real, Strict, _format_error, parse_case
 from .results import Trajectory, read_results
+from .engines import EngineError
+from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
 from .runner import RESULTS, run_case
 
 REFERENCE = Path(os.environ.get("DEMORCH_REFERENCE", Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"))
@@ -72,8 +76,11 @@ class PackingSpec(Strict):
     volume: Real(gt=0.0, le=10.0) = 0.04  # m³ of pile at the apparent density below
     apparent_density: Real(gt=0.0, le=1e4) | None = None  # default: 1000 (pour) or 1600 (pile)
     settle_time: Real(gt=0.0, le=100.0) = 1.0
-    # The paper changed contact parameters while packing to reach the target density, then restored them.
-    brick_brick_mu: Real(ge=0.0, le=10.0) | None = None
+    # The paper changed contact parameters while packing to reach the target density, then restored
+    # them. Default: the study's own contacts. Give them explicitly to share one packing across
+    # studies (a campaign) that vary the contacts of the flow only.
+    contacts: ContactSpec | None = None
+    brick_brick_mu: Real(ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing
 
 
 class ReleaseSpec(Strict):
@@ -90,6 +97,15 @@ class AvalancheStudy(Strict):
     contacts: ContactSpec = ContactSpec()
     packing: PackingSpec = PackingSpec()
     release: ReleaseSpec = ReleaseSpec()
+
+    @model_validator(mode="after")
+    def _packing_law(self) -> "AvalancheStudy":
+        if self.packing.contacts is not None and self.packing.contacts.law != self.contacts.law:
+            raise ValueError(
+                f"packing.contacts.law: must be {self.contacts.law!r} like contacts.law "
+                "(the flow continues the packing's contact history)"
+            )
+        return self
 
     @property
     def target_density(self) -> float:
@@ -113,83 +129,161 @@ def load_study(path: Path) -> AvalancheStudy:
         raise CaseError(f"{path}: {_format_error(error)}") from None
 
 
-def _contacts(study: AvalancheStudy, brick_brick_mu: float | None = None) -> list[dict[str, Any]]:
-    law = study.contacts.law
-    brick_brick = study.contacts.brick_brick.model_dump()
+def _contacts(spec: ContactSpec, brick_brick_mu: float | None = None) -> list[dict[str, Any]]:
+    """Case contact pairs from a study's contact spec (brick/box takes the brick/board values)."""
+    brick_brick = spec.brick_brick.model_dump()
     if brick_brick_mu is not None:
         brick_brick["mu"] = brick_brick_mu
-    board = study.contacts.brick_board.model_dump()
+    board = spec.brick_board.model_dump()
     return [
-        {"materials": ["brick", "brick"], "law": law, **brick_brick},
-        {"materials": ["brick", "board"], "law": law, **board},
-        {"materials": ["brick", "box"], "law": law, **board},
+        {"materials": ["brick", "brick"], "law": spec.law, **brick_brick},
+        {"materials": ["brick", "board"], "law": spec.law, **board},
+        {"materials": ["brick", "box"], "law": spec.law, **board},
     ]
 
 
-def study_case(study: AvalancheStudy) -> Case:
-    """The whole study as one case: rain (or stack) into the closed box, settle, open the trap, flow."""
+def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, float]:
+    """Where the bricks start (rain cells or the ordered pile) and the height of the box walls."""
     geometry, brick, count = study.geometry.build(), study.brick.build(), study.brick_count
     if study.packing.kind == "random_pour":
         # 3 mm between cells: LIGGGHTS places each clump within 1 mm of where it is asked to.
         positions, orientations = rain_positions(geometry, brick, count, study.seed, gap=0.003)
-        height = max(geometry.box_height, rain_height(geometry, brick, count, gap=0.003))
-    else:
-        gap = 0.0025 if study.engine is Engine.liggghts else 0.0005  # LIGGGHTS places within 1 mm
-        positions, orientations = ordered_pile(geometry, brick, count, gap=gap)
-        height = max(geometry.box_height, (count // max(1, int(geometry.box_depth // (brick.length + gap)) * int(geometry.box_width // (brick.width + gap))) + 1) * (brick.thickness + gap) + gap)
-    walls = geometry.walls(trap_closed=True, wall_height=height)
-    for wall in walls:
-        if wall["name"] == "trap":
-            wall["remove_at"] = study.packing.settle_time
+        return positions, orientations, max(geometry.box_height, rain_height(geometry, brick, count, gap=0.003))
+    gap = 0.0025 if study.engine is Engine.liggghts else 0.0005  # LIGGGHTS places within 1 mm
+    positions, orientations = ordered_pile(geometry, brick, count, gap=gap)
+    per_layer = max(1, int(geometry.box_depth // (brick.length + gap)) * int(geometry.box_width // (brick.width + gap)))
+    height = max(geometry.box_height, (count // per_layer + 1) * (brick.thickness + gap) + gap)
+    return positions, orientations, height
+
+
+def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, contacts: list[dict[str, Any]],
+          clumps: list[dict[str, Any]], walls: list[dict[str, object]], **extra: Any) -> Case:
     spec = study.brick
     return parse_case(
         {
-            "name": study.name,
+            "name": name,
             "engine": study.engine.value,
             "seed": study.seed,
-            "time": {"duration": study.packing.settle_time + study.release.duration, "output_interval": study.release.output_interval},
+            "time": {"duration": duration, "output_interval": min(output_interval, duration)},
             "materials": [
                 {"name": "brick", "density": spec.density},
                 {"name": "board", "density": 1400.0},
                 {"name": "box", "density": 1400.0},
             ],
-            "contacts": _contacts(study, study.packing.brick_brick_mu),
+            "contacts": contacts,
             "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout)}],
-            "bodies": {
-                "clumps": [
-                    {"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()}
-                    for p, q in zip(positions, orientations)
-                ]
-            },
+            "bodies": {"clumps": clumps},
             "walls": walls,
+            **extra,
         },
         source=f"study {study.name}",
     )
 
 
-def release_frame(trajectory: Trajectory, study: AvalancheStudy) -> int:
-    """Index of the frame at which the trap opens."""
-    return int(np.argmin(np.abs(trajectory.time - study.packing.settle_time)))
+def packing_case(study: AvalancheStudy) -> Case:
+    """Bricks rained (or stacked) into the closed box and settled for `packing.settle_time`.
+
+    Everything that shapes the packing is in this case, and nothing else: its hash is the packing's
+    key, so studies that differ only after the opening (release contacts, duration) share it.
+    LIGGGHTS saves its whole state at the end (clumps cannot be re-inserted exactly there).
+    """
+    positions, orientations, height = _initial_layout(study)
+    clumps = [{"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()} for p, q in zip(positions, orientations)]
+    walls = study.geometry.build().walls(trap_closed=True, wall_height=height)
+    return _case(study, "packing", study.packing.settle_time, study.release.output_interval,
+                 _contacts(study.packing.contacts or study.contacts, study.packing.brick_brick_mu), clumps, walls, save_state=study.engine is Engine.liggghts)
+
+
+def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | None) -> Case:
+    """The flow: the settled bricks (last packing frame) with the trap gone and the study's contacts.
+
+    Bodies are listed as they were packed; LIGGGHTS starts from the packing's state file (contact
+    history included), YADE rebuilds each clump at exactly that position, orientation and velocity
+    (its contacts start afresh at the opening).
+    """
+    _, _, height = _initial_layout(study)
+    last = -1
+    clumps = [
+        {
+            "shape": "brick",
+            "material": "brick",
+            "position": packed.position[last, k].tolist(),
+            "orientation": packed.orientation[last, k].tolist(),
+            "velocity": packed.velocity[last, k].tolist(),
+            "angular_velocity": packed.angular_velocity[last, k].tolist(),
+        }
+        for k in range(packed.n_bodies)
+    ]
+    walls = study.geometry.build().walls(trap_closed=False, wall_height=height)
+    extra = {"initial_state": str(state_file.resolve())} if state_file is not None else {}
+    return _case(study, study.name, study.release.duration, study.release.output_interval, _contacts(study.contacts), clumps, walls, **extra)
+
+
+PACKING_LOCK_TIMEOUT_S = 24 * 3600.0
+
+
+def ensure_packing(
+    study: AvalancheStudy, root: Path, progress: Callable[[float, float], None] | None = None, timeout: float | None = None
+) -> tuple[Path, bool]:
+    """The settled packing of `study` under root/<key>/, run once and then reused. Returns (directory, reused).
+
+    A lock file serialises processes that need the same packing (campaign workers, say): the first
+    runs it, the others wait and reuse it. A failed or interrupted attempt is moved to root/attic.
+    """
+    from .campaign import store
+
+    case = packing_case(study)
+    key = store.run_id(case)
+    directory = root / key
+    root.mkdir(parents=True, exist_ok=True)
+    with open(root / f"{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        state = store.status(directory)
+        if state == "completed" and _state_file_ok(study, directory):
+            return directory, True
+        if directory.exists():
+            store.retire(directory, root)
+        try:
+            run_case(case, root, directory, progress=progress, timeout=timeout)
+        except EngineError as error:
+            raise EngineError(f"the packing run failed: {error.summary}", error.deck, error.log, error.tail) from None
+    return directory, False
+
+
+def _state_file_ok(study: AvalancheStudy, directory: Path) -> bool:
+    return study.engine is not Engine.liggghts or (directory / LIGGGHTS_STATE).is_file()
 
 
 def run_study(
     study: AvalancheStudy,
     outdir: Path,
     progress: Callable[[str], Callable[[float, float], None] | None] | None = None,
+    packings: Path | None = None,
+    timeout: float | None = None,
 ) -> dict[str, Any]:
-    """Run the study (or reuse a finished run in outdir/run) and measure it. Returns the report."""
+    """Pack (or reuse the packing from `packings`, default outdir/../packings), release, measure.
+
+    A finished release in outdir/run is reused (rerun = report only). Returns the report, also
+    written to outdir/report.json.
+    """
     outdir.mkdir(parents=True, exist_ok=True)
     geometry, brick = study.geometry.build(), study.brick.build()
     rundir = outdir / "run"
+    packing_record = outdir / "packing.json"
     if not (rundir / RESULTS).exists():
-        run_case(study_case(study), outdir, rundir, progress=progress("avalanche") if progress else None)
+        root = packings if packings is not None else outdir.resolve().parent / "packings"
+        packing_dir, reused = ensure_packing(study, root, progress("packing") if progress else None, timeout)
+        packed = read_results(packing_dir / RESULTS)
+        if not np.isfinite(packed.position[-1]).all():
+            raise CaseError(f"packing {packing_dir}: some bricks left the box while settling; check the study geometry")
+        state = packing_dir / LIGGGHTS_STATE if study.engine is Engine.liggghts else None
+        packing_record.write_text(json.dumps({"directory": str(packing_dir), "reused": reused}, indent=2) + "\n")
+        run_case(release_case(study, packed, state), outdir, rundir, progress=progress("release") if progress else None, timeout=timeout)
     trajectory = read_results(rundir / RESULTS)
-    opening = release_frame(trajectory, study)
-    packed = trajectory.position[opening]
-    inside = np.isfinite(packed).all(axis=1)
-    density = apparent_density(geometry, packed[inside], trajectory.orientation[opening][inside], brick)
-    report = measure(trajectory, brick, first_frame=opening)
-    report["packing"] = {"bricks": int(inside.sum()), "apparent_density": density, "target_apparent_density": study.target_density}
+    density = apparent_density(geometry, trajectory.position[0], trajectory.orientation[0], brick)
+    report = measure(trajectory, brick)
+    packing_info = json.loads(packing_record.read_text()) if packing_record.exists() else {}
+    report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density, **packing_info}
     report["study"] = study.model_dump(mode="json")
     (outdir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     return report

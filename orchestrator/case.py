@@ -223,6 +223,13 @@ class Case(Strict):
     bodies: Bodies
     walls: list[Wall] = []
     domain: Domain | None = None
+    # Write the engine's whole state at the end (LIGGGHTS: `state.restart`, contact history included),
+    # so a later case can start from it: a settled packing feeding many releases, say.
+    save_state: bool = False
+    # LIGGGHTS only: start from a state file written with `save_state` (a path relative to the case
+    # file). `bodies` must then list the bodies as they are in that state, in the same order; the
+    # state's simulation box is kept. YADE needs no state file: it places clumps exactly.
+    initial_state: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":

@@ -140,8 +140,9 @@ def study_table(title: str, report: dict[str, Any]) -> Table:
 @click.argument("study_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
 @click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
-def avalanche(study_path: Path, engine: str | None, output: Path | None) -> None:
-    """Pack bricks, release them down the slope, and report deposit and front against the references."""
+@click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where settled packings are kept and reused (default: beside the study directory, in packings/).")
+def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None) -> None:
+    """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references."""
     from .avalanche_study import load_study, run_study
 
     try:
@@ -156,12 +157,15 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None) -> None
                 task = progress.add_task("starting", total=1.0, stage=name)
                 return _progress_callback(progress, task)
 
-            report = run_study(study, outdir, progress=stage)
+            report = run_study(study, outdir, progress=stage, packings=packings)
     except CaseError as error:
         _fail(str(error))
     except EngineError as error:
         _fail(str(error), code=3)
     page = write_study_report(outdir, report, study.geometry.slope_deg)
+    packing = report.get("packing", {})
+    if packing.get("directory"):
+        console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
     console.print(study_table(f"{study.name} on {study.engine.value}", report))
     console.print(f"report: {page}")
 
@@ -169,10 +173,11 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None) -> None
 @main.command()
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Engine (default: LIGGGHTS).")
 @click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory.")
+@click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where packings are kept and reused.")
 @click.pass_context
-def demo(context: click.Context, engine: str | None, output: Path | None) -> None:
+def demo(context: click.Context, engine: str | None, output: Path | None, packings: Path | None) -> None:
     """A small brick avalanche (cases/avalanche/small.yaml): deposit and front against the references."""
-    context.invoke(avalanche, study_path=DEMO_STUDY, engine=engine, output=output)
+    context.invoke(avalanche, study_path=DEMO_STUDY, engine=engine, output=output, packings=packings)
 
 
 @main.command()

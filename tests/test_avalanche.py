@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from orchestrator.avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
-from orchestrator.avalanche_study import AvalancheStudy, release_frame, run_study
+from orchestrator.avalanche_study import AvalancheStudy, run_study
 from orchestrator.bricks import BrickClump, quaternion_matrix
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS
@@ -64,39 +64,54 @@ def tiny_study(engine: str) -> AvalancheStudy:
     """≈30 bricks in a 12 × 10 cm box launched from 25 cm: a real avalanche in well under a minute.
 
     k_n = 2e4 N/m (the 2012 study found E2G flat between 1e4 and 1e6) makes the step 2.2 × longer.
+    The packing's contacts are given explicitly, so releases with other contacts share its packing.
     """
+    contacts = {
+        "brick_brick": {"en2": 0.13, "mu": 0.86, "kn": 2e4, "kt_over_kn": 0.27},
+        "brick_board": {"en2": 0.53, "mu": 0.46, "kn": 2e4, "kt_over_kn": 0.42},
+    }
     return AvalancheStudy.model_validate(
         {
             "name": "tiny",
             "engine": engine,
             "geometry": {"launch_height": 0.25, "board_length": 0.8, "board_width": 0.5, "box_depth": 0.12, "box_width": 0.1, "box_height": 0.08},
-            "packing": {"volume": 1.9e-4, "settle_time": 0.4},
-            "contacts": {
-                "brick_brick": {"en2": 0.13, "mu": 0.86, "kn": 2e4, "kt_over_kn": 0.27},
-                "brick_board": {"en2": 0.53, "mu": 0.46, "kn": 2e4, "kt_over_kn": 0.42},
-            },
+            "packing": {"volume": 1.9e-4, "settle_time": 0.4, "contacts": contacts},
+            "contacts": contacts,
             "release": {"duration": 1.6, "output_interval": 0.02},
         }
     )
 
 
 @pytest.mark.parametrize("engine", engine_params())
-def test_tiny_avalanche_reaches_the_flat_and_stops(engine: str, tmp_path: Path) -> None:
+def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(engine: str, tmp_path: Path) -> None:
     study = tiny_study(engine)
-    report = run_study(study, tmp_path)
-    trajectory = read_results(tmp_path / "run" / RESULTS)
+    packings = tmp_path / "packings"
+    report = run_study(study, tmp_path / "first", packings=packings)
+    trajectory = read_results(tmp_path / "first" / "run" / RESULTS)
     assert trajectory.n_bodies == study.brick_count
     assert np.isfinite(trajectory.position[-1]).all()  # no brick lost, mass conserved
-    opening = release_frame(trajectory, study)
-    assert np.all(trajectory.position[opening, :, 0] < 0.0)  # packed in the box, on the slope, at the opening
+    assert np.all(trajectory.position[0, :, 0] < 0.0)  # packed in the box, on the slope, at the opening
+    assert report["packing"]["reused"] is False
     deposit = report["deposit"]
     assert deposit["bodies_in_deposit"] + deposit["outliers"] == study.brick_count  # every brick accounted for
     assert deposit["x_cm"] > 0.0  # the mass centre ended on the flat board
     # Stopped: what still moves (a brick settling on an edge, say) holds < 1e-4 of the energy released.
     assert report["kinetic_to_released_energy"] < 1e-4
     assert 0.0 < deposit["travel_angle_cm_deg"] < 45.0
+    # The release starts exactly where the packing ended (LIGGGHTS: its restart file; YADE: exact placement).
+    packing_dir = Path(report["packing"]["directory"])
+    packed = read_results(packing_dir / RESULTS)
+    np.testing.assert_allclose(trajectory.position[0], packed.position[-1], rtol=0, atol=1e-9)
     # Rerunning reuses the packing and the release: nothing new is computed.
-    assert run_study(study, tmp_path)["deposit"] == deposit
+    assert run_study(study, tmp_path / "first", packings=packings)["deposit"] == deposit
+    # Another release (slipperier board) from the same packing: no new packing run, a different flow.
+    slippery = study.model_copy(update={"contacts": study.contacts.model_copy(update={"brick_board": study.contacts.brick_board.model_copy(update={"mu": 0.40})})})
+    packing_mtime = (packing_dir / RESULTS).stat().st_mtime_ns
+    second = run_study(slippery, tmp_path / "second", packings=packings)
+    assert second["packing"]["reused"] is True and second["packing"]["directory"] == str(packing_dir)
+    assert (packing_dir / RESULTS).stat().st_mtime_ns == packing_mtime
+    assert len([d for d in packings.iterdir() if d.is_dir()]) == 1
+    assert second["deposit"]["x_cm"] > deposit["x_cm"]  # less friction on the boards: the mass travels further
 
 
 def test_preset_studies_load_with_the_paper_brick_counts() -> None:
@@ -106,3 +121,23 @@ def test_preset_studies_load_with_the_paper_brick_counts() -> None:
     assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
     assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
     assert presets["small"].brick_count == pytest.approx(95, rel=0.02)
+
+
+def test_packing_law_must_match_the_flow_law() -> None:
+
+    with pytest.raises(Exception, match=r"packing.contacts.law"):
+        AvalancheStudy.model_validate({"name": "x", "contacts": {"law": "bilinear"}, "packing": {"contacts": {"law": "linear"}}})
+
+
+def test_packing_key_ignores_what_happens_after_the_opening() -> None:
+    """Studies that differ only in the flow's contacts or duration share a packing; a packing input changes it."""
+    from orchestrator.avalanche_study import packing_case
+    from orchestrator.campaign.store import run_id
+
+    study = tiny_study("liggghts")
+    longer = study.model_copy(update={"release": study.release.model_copy(update={"duration": 3.0})})
+    other_flow = study.model_copy(update={"contacts": study.contacts.model_copy(update={"law": "bilinear", "brick_brick": study.contacts.brick_brick.model_copy(update={"en2": 0.3})})})
+    other_seed = study.model_copy(update={"seed": 7})
+    key = run_id(packing_case(study))
+    assert run_id(packing_case(longer)) == key and run_id(packing_case(other_flow)) == key
+    assert run_id(packing_case(other_seed)) != key

@@ -149,3 +149,35 @@ def test_dask_local_cluster_gives_the_same_results(tmp_path: Path) -> None:
     assert list(pool.index) == list(dask.index)  # the same content-addressed runs
     metrics = [c for c in pool.columns if c.startswith("metric.")]
     pd.testing.assert_frame_equal(pool[metrics], dask[metrics], rtol=0, atol=0)
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_avalanche_campaign_shares_one_packing(tmp_path: Path) -> None:
+    """A campaign over an avalanche study: two board frictions, one packing made once and fed to both."""
+    from test_avalanche import tiny_study
+
+    study = tiny_study("liggghts").model_dump(mode="json")
+    (tmp_path / "study.yaml").write_text(yaml.safe_dump(study))
+    campaign = tmp_path / "campaign.yaml"
+    designs = [{"kind": "grid", "parameters": {"contacts.brick_board.mu": [0.40, 0.46]}}]
+    campaign.write_text(yaml.safe_dump({"name": "boards", "base": "study.yaml", "designs": designs}))
+    counts = run_campaign(campaign, tmp_path / "out", jobs=2)
+    assert (counts.done, counts.failed) == (2, 0)
+    packings = [d for d in (tmp_path / "out" / "packings").iterdir() if d.is_dir()]
+    assert len(packings) == 1  # the second worker waited for the first one's packing and reused it
+    index = pd.read_parquet(tmp_path / "out" / "index.parquet").set_index("param.contacts.brick_board.mu")
+    assert set(index["status"]) == {"completed"}
+    assert index.loc[0.40, "metric.deposit.x_cm"] > index.loc[0.46, "metric.deposit.x_cm"]  # less friction, further
+    assert (index["metric.packing.apparent_density"] > 0).all()
+    assert run_campaign(campaign, tmp_path / "out", jobs=2).skipped == 2  # relaunch: nothing to run
+
+
+def test_example_avalanche_campaign_is_nine_studies_on_one_packing() -> None:
+    from orchestrator.avalanche_study import AvalancheStudy, packing_case
+
+    spec, base = load_campaign(REPO / "campaigns" / "avalanche_small_board_contacts.yaml")
+    expanded = expand(spec, base)
+    assert len(expanded) == 9 and all(isinstance(study, AvalancheStudy) for _, study in expanded)
+    assert len({store.run_id(study) for _, study in expanded}) == 9
+    assert len({store.run_id(packing_case(study)) for _, study in expanded}) == 1

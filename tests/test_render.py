@@ -94,3 +94,24 @@ def test_yade_series_split_reports_impossible_pairs() -> None:
     bad = parse_case(data)
     with pytest.raises(CaseError, match=r"kn: YADE combines per-material values in series"):
         split_in_series(bad, pair_constants(bad), "kn")
+
+
+def test_initial_state_errors_come_before_any_engine(tmp_path: Path, no_engine_process: None) -> None:
+    """A missing state file, or a state file on YADE, is a case error naming `initial_state`."""
+    case = sliding_case("liggghts").model_copy(update={"initial_state": "no_such.restart"})
+    with pytest.raises(CaseError, match=r"^initial_state: no state file at .*no_such\.restart"):
+        render_case(case, tmp_path, tmp_path / "run")
+    (tmp_path / "packed.restart").write_bytes(b"state")
+    with pytest.raises(CaseError, match=r"^initial_state: LIGGGHTS only"):
+        render_case(with_engine(case, "yade").model_copy(update={"initial_state": "packed.restart"}), tmp_path, tmp_path / "yade")
+
+
+def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
+    """save_state writes a restart at the end; initial_state reads one (linked into the run) instead of the data file."""
+    (tmp_path / "packed.restart").write_bytes(b"state")
+    case = sliding_case("liggghts").model_copy(update={"initial_state": "packed.restart", "save_state": True})
+    deck = render_case(case, tmp_path, tmp_path / "run").read_text()
+    assert "read_restart    initial.restart" in deck and "read_data" not in deck
+    assert deck.rstrip().endswith("write_restart   state.restart")
+    assert deck.index("reset_timestep  0") < deck.index("\nrun ")
+    assert (tmp_path / "run" / "initial.restart").read_bytes() == b"state"

@@ -10,6 +10,7 @@ launch finds those runs `incomplete`, moves them to the attic and runs them agai
 from __future__ import annotations
 
 import concurrent.futures as futures
+import json
 import multiprocessing
 import os
 import time
@@ -19,29 +20,69 @@ from typing import Any, Callable, Iterator
 
 from ..case import Case, CaseError
 from ..engines.base import EngineError, die_with_parent
-from ..runner import RUN_RECORD, run_case, write_json_atomic
+from ..runner import RESULTS, RUN_RECORD, run_case, write_json_atomic
 from . import store
-from .spec import expand, load_campaign
+from .spec import base_kind, expand, load_campaign
 
 
-def perform(case_json: str, directory: str, case_dir: str, timeout: float | None) -> dict[str, Any]:
-    """Run one case in `directory` (any process); never raises for an engine or case failure."""
+def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case") -> dict[str, Any]:
+    """Run one case or avalanche study in `directory` (any process); never raises for an engine or case failure."""
     path = Path(directory)
     path.mkdir(parents=True, exist_ok=True)
     pid_file = path / store.WORKER_PID
     pid_file.write_text(str(os.getpid()))
     started = time.perf_counter()
     try:
-        case = Case.model_validate_json(case_json)
-        record = run_case(case, Path(case_dir), path, timeout=timeout)
+        if kind == "avalanche":
+            record = perform_study(point_json, path, started, timeout)
+        else:
+            case = Case.model_validate_json(point_json)
+            record = run_case(case, Path(case_dir), path, timeout=timeout)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
-        if isinstance(error, CaseError):
-            write_json_atomic(path / RUN_RECORD, {"status": "failed", "error": str(error)})
         summary = error.summary if isinstance(error, EngineError) else str(error)
+        if isinstance(error, CaseError) or kind == "avalanche":
+            tail = error.tail if isinstance(error, EngineError) else []
+            write_json_atomic(path / RUN_RECORD, {"status": "failed", "error": summary, "log_tail": tail})
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
     finally:
         pid_file.unlink(missing_ok=True)
+
+
+def perform_study(study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
+    """An avalanche study as one campaign run: packings shared in <campaign>/packings, a summary run.json.
+
+    The summary points at the release's results (run/results.h5) and holds the study's scalar
+    metrics (deposit, front, packing), so the index and the plots treat it like any run.
+    """
+    from ..avalanche_study import AvalancheStudy, run_study
+
+    study = AvalancheStudy.model_validate_json(study_json)
+    report = run_study(study, path, packings=path.parent.parent / "packings", timeout=timeout)
+    release = json.loads((path / "run" / RUN_RECORD).read_text())
+    record = {
+        "status": "completed",
+        "kind": "avalanche",
+        "results": f"run/{RESULTS}",
+        "engine": release.get("engine"),
+        "engine_version": release.get("engine_version"),
+        "contact_build": release.get("contact_build"),
+        "wall_time_s": time.perf_counter() - started,
+        "packing": report["packing"].get("directory"),
+        "packing_reused": report["packing"].get("reused"),
+        "metrics": study_metrics(report),
+    }
+    write_json_atomic(path / RUN_RECORD, record)
+    return record
+
+
+def study_metrics(report: dict[str, Any]) -> dict[str, float]:
+    """The scalar numbers of a study report, flat: deposit.*, front.*, packing density, energy left."""
+    metrics = {f"deposit.{k}": float(v) for k, v in report["deposit"].items() if isinstance(v, (int, float))}
+    metrics.update({f"front.{k}": float(v) for k, v in report["front"].items() if isinstance(v, (int, float))})
+    metrics["packing.apparent_density"] = float(report["packing"]["apparent_density"])
+    metrics["kinetic_to_released_energy"] = float(report["kinetic_to_released_energy"])
+    return metrics
 
 
 @dataclass
@@ -73,13 +114,15 @@ class Plan:
     case_dir: Path
     timeout: float | None
     points: dict[str, dict[str, Any]]
-    cases: dict[str, Case]
+    cases: dict[str, Any]  # validated cases, or avalanche studies when kind is "avalanche"
+    kind: str
     to_run: list[str]
     skipped: dict[str, str]  # run id -> why (completed, running elsewhere, failed)
 
 
 def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
     spec, base = load_campaign(campaign_file)
+    kind = base_kind(spec, base)
     expanded = expand(spec, base)
     points, cases = {}, {}
     for parameters, case in expanded:
@@ -99,11 +142,12 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
             store.retire(directory, campaign_dir)
         to_run.append(identifier)
     base_dir = (campaign_file.parent / spec.base).resolve().parent
-    return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, to_run, skipped)
+    return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped)
 
 
-def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None]:
-    return (plan.cases[identifier].model_dump_json(), str(store.run_dir(plan.campaign_dir, identifier)), str(plan.case_dir), plan.timeout)
+def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str]:
+    directory = str(store.run_dir(plan.campaign_dir, identifier))
+    return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind)
 
 
 def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:

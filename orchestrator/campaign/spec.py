@@ -64,7 +64,10 @@ Design = Annotated[Union[GridDesign, ZipDesign, SampledDesign], Field(discrimina
 
 class CampaignSpec(Strict):
     name: Name
-    base: str  # case file, relative to the campaign file
+    base: str  # a case file or an avalanche study file, relative to the campaign file
+    # What `base` is: a case, or an avalanche study (packing + release + measures; its runs share
+    # packings). `auto`: a study when the file has `packing`, `release` or `geometry` and no `bodies`.
+    kind: Literal["auto", "case", "avalanche"] = "auto"
     engine: Literal["liggghts", "yade"] | None = None
     designs: list[Design] = []
     replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
@@ -72,8 +75,30 @@ class CampaignSpec(Strict):
     timeout_s: Annotated[float, Field(gt=0)] | None = None
 
 
+STUDY_KEYS = {"packing", "release", "geometry", "brick"}
+
+
+def base_kind(spec: CampaignSpec, base: dict[str, Any]) -> str:
+    """`case` or `avalanche`: what each point of the campaign runs."""
+    if spec.kind != "auto":
+        return spec.kind
+    return "avalanche" if isinstance(base, dict) and "bodies" not in base and STUDY_KEYS & set(base) else "case"
+
+
+def validate_point(kind: str, data: dict[str, Any], source: str) -> Any:
+    """A validated case, or a validated avalanche study, from a mapping."""
+    if kind == "avalanche":
+        from ..avalanche_study import AvalancheStudy
+
+        try:
+            return AvalancheStudy.model_validate(data)
+        except ValidationError as error:
+            raise CaseError(f"{source}: {_format_error(error)}") from None
+    return parse_case(data, source=source)
+
+
 def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
-    """The campaign and its base case (as a mapping), both validated."""
+    """The campaign and its base case or study (as a mapping), both validated."""
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as error:
@@ -87,7 +112,7 @@ def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
         base = yaml.safe_load(base_path.read_text())
     except (OSError, yaml.YAMLError) as error:
         raise CaseError(f"{path}: base: cannot read {base_path} ({error})") from None
-    parse_case(base, source=str(base_path))  # the base must be valid on its own
+    validate_point(base_kind(spec, base), base, str(base_path))  # the base must be valid on its own
     return spec, base
 
 
@@ -130,7 +155,7 @@ def set_path(data: dict[str, Any], path: str, value: Any) -> None:
 
 def _optional_key(parts: list[str]) -> bool:
     """Leaves a campaign may add although the base omits them (they have defaults in the case model)."""
-    return parts[-1] in {"law", "seed", "velocity", "angular_velocity", "step", "safety_factor", "engine", "fixed_rotation", "domain", "orientation"}
+    return parts[-1] in {"law", "seed", "velocity", "contacts", "apparent_density", "brick_brick_mu", "angular_velocity", "step", "safety_factor", "engine", "fixed_rotation", "domain", "orientation"}
 
 
 def get_path(data: dict[str, Any], path: str) -> Any:
@@ -178,8 +203,11 @@ def _dotted(node: ast.AST) -> str:
     raise CaseError("derived expressions may only name case paths like contacts.0.kn")
 
 
-def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Case]]:
-    """(varied parameters, validated case) for every point × replicate, in a stable order."""
+def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
+    """(varied parameters, validated case or study) for every point × replicate, in a stable order."""
+    kind = base_kind(spec, base)
+    if kind == "avalanche":  # every field present (defaults filled in), so any study path can vary
+        base = validate_point(kind, base, spec.base).model_dump(mode="json")
     blocks = [design_points(design) for design in spec.designs] or [[{}]]
     points = [dict(itertools.chain.from_iterable(p.items() for p in combo)) for combo in itertools.product(*blocks)]
     expanded = []
@@ -198,6 +226,6 @@ def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any
                 value = evaluate(expression, data)
                 set_path(data, path, value)
                 parameters[path] = value
-            case = parse_case(data, source=f"{spec.name} point {index}" + (f" replicate {replicate}" if spec.replicates > 1 else ""))
-            expanded.append((parameters, case))
+            source = f"{spec.name} point {index}" + (f" replicate {replicate}" if spec.replicates > 1 else "")
+            expanded.append((parameters, validate_point(kind, data, source)))
     return expanded

@@ -16,8 +16,8 @@ from typing import Any
 
 import h5py
 import pandas as pd
+from pydantic import BaseModel
 
-from ..case import Case
 from ..runner import RESULTS, RUN_RECORD
 
 RUNS = "runs"
@@ -27,7 +27,8 @@ INDEX = "index.parquet"
 WORKER_PID = "worker.pid"
 
 
-def run_id(case: Case) -> str:
+def run_id(case: BaseModel) -> str:
+    """Hash of the canonical JSON of a validated case (or study): the same inputs, the same id."""
     canonical = json.dumps(case.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
 
@@ -60,7 +61,8 @@ def status(directory: Path) -> str:
         record = json.loads(record_path.read_text())
     except (OSError, json.JSONDecodeError):
         return "incomplete"
-    if record.get("status") == "completed" and _results_readable(directory / RESULTS):
+    # A study's record points at its release's results (run/results.h5); a case's lie beside it.
+    if record.get("status") == "completed" and _results_readable(directory / record.get("results", RESULTS)):
         return "completed"
     if record.get("status") == "failed":
         return "failed"

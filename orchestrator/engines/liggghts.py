@@ -19,6 +19,8 @@ from .base import EngineError, EngineInfo, ProgressCallback, require_executable,
 DECK_NAME = "in.liggghts"
 DATA_NAME = "data.spheres"
 DUMP_NAME = "frames.dump"
+STATE_NAME = "state.restart"  # written at the end when the case has `save_state`
+INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from, linked into the run
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
 
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)\s*$")
@@ -66,6 +68,11 @@ def _sphere_radii(case: Case) -> list[float]:
     return radii
 
 
+def _spheres_per_clump(case: Case) -> str:
+    counts = sorted({case.shape(c.shape).clump(case.material(c.material).density).n_spheres for c in case.bodies.clumps})
+    return " or ".join(str(n) for n in counts) + " spheres each"
+
+
 def _numbers(values: object) -> str:
     return " ".join(repr(float(v)) for v in values)  # type: ignore[union-attr]
 
@@ -106,6 +113,20 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
         for i, c in enumerate(case.bodies.clumps)
     ]
     return {"clump_templates": list(templates.values()), "clumps": clumps, "placement_radius": PLACEMENT_RADIUS}
+
+
+def link_initial_state(source: Path, target: Path) -> None:
+    """Put the state file a case starts from into its run directory (a hard link when possible).
+
+    The run then holds everything its deck reads, even if the packing it came from is deleted.
+    """
+    if not source.is_file():
+        raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
+    target.unlink(missing_ok=True)
+    try:
+        os.link(source, target)
+    except OSError:
+        shutil.copyfile(source, target)
 
 
 def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
@@ -179,6 +200,8 @@ class LiggghtsAdapter:
             geometry.write_ascii_stl(stl, triangles)
             walls.append({"name": wall.name, "stl": f"meshes/{stl.name}", "type": types[wall.material]})
         self._write_data(case, prepared, types, rundir / DATA_NAME)
+        if case.initial_state:
+            link_initial_state(case_dir / case.initial_state, rundir / INITIAL_STATE_NAME)
         gravity = np.asarray(case.gravity, dtype=float)
         magnitude = float(np.linalg.norm(gravity))
         direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
@@ -202,6 +225,9 @@ class LiggghtsAdapter:
             "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
             "total_steps": prepared.schedule.total_steps,
             "segments": run_segments(case, prepared.schedule),
+            "initial_state": INITIAL_STATE_NAME if case.initial_state else "",
+            "save_state": case.save_state,
+            "state_file": STATE_NAME,
         }
         deck = rundir / DECK_NAME
         deck.write_text(render("liggghts", "case.in.j2", context))
@@ -261,8 +287,10 @@ class LiggghtsAdapter:
         tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout)
         if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
             lost = watcher.first_atoms - watcher.last_atoms
+            case = common.saved_case(rundir)
+            what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {_spheres_per_clump(case)})"
             raise EngineError(
-                f"{lost} bodies left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
+                f"{what} left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
                 deck,
                 rundir / "engine.log",
                 tail,

@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import physics
 from ..bricks import world_sphere_centres
-from ..case import Case, ContactLaw
+from ..case import Case, CaseError, ContactLaw
 from ..results import Trajectory
 from . import common
 from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -57,6 +57,11 @@ class YadeAdapter:
 
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
+        if case.initial_state:
+            raise CaseError(
+                "initial_state: LIGGGHTS only; YADE places clumps exactly, so give the saved positions, "
+                "orientations and velocities in `bodies` instead"
+            )
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
         common.save_case(case, rundir)
         facets = [
@@ -82,6 +87,7 @@ class YadeAdapter:
             "seed": case.seed,
             "dt": prepared.schedule.dt,
             "total_steps": prepared.schedule.total_steps,
+            "save_state": case.save_state,
             "output_every": prepared.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
             "frames_file": FRAMES_NAME,
