@@ -118,6 +118,11 @@ class AvalancheStudy(Strict):
         return brick_count(self.packing.volume, self.target_density, self.brick.build())
 
 
+def with_engine(study: AvalancheStudy, engine: str | None) -> AvalancheStudy:
+    """The study on another engine (`-e`); None keeps its own."""
+    return study if engine is None else study.model_copy(update={"engine": Engine(engine)})
+
+
 def load_study(path: Path) -> AvalancheStudy:
     try:
         data = yaml.safe_load(path.read_text())

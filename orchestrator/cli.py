@@ -143,12 +143,10 @@ def study_table(title: str, report: dict[str, Any]) -> Table:
 @click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where settled packings are kept and reused (default: beside the study directory, in packings/).")
 def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None) -> None:
     """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references."""
-    from .avalanche_study import load_study, run_study
+    from .avalanche_study import load_study, run_study, with_engine
 
     try:
-        study = load_study(study_path)
-        if engine:
-            study = study.model_copy(update={"engine": engine})
+        study = with_engine(load_study(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
         console.print(f"[bold]{study.name}[/]: {study.brick_count} bricks, {study.packing.kind}, engine {study.engine.value} → {outdir}")
         with Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:

@@ -141,3 +141,12 @@ def test_packing_key_ignores_what_happens_after_the_opening() -> None:
     key = run_id(packing_case(study))
     assert run_id(packing_case(longer)) == key and run_id(packing_case(other_flow)) == key
     assert run_id(packing_case(other_seed)) != key
+
+
+def test_engine_override_gives_a_runnable_study() -> None:
+    """`demorch avalanche -e yade`: the study, and the cases it expands into, run on the engine asked for."""
+    from orchestrator.avalanche_study import packing_case, with_engine
+
+    study = with_engine(tiny_study("liggghts"), "yade")
+    assert packing_case(study).engine.value == "yade" and packing_case(study).save_state is False
+    assert with_engine(study, None) is study

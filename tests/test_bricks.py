@@ -45,3 +45,19 @@ def test_quaternion_rotation_and_placement() -> None:
     centres = world_sphere_centres(brick, np.array([1.0, 2.0, 3.0]), np.array(quarter_turn_z))
     np.testing.assert_allclose(centres.mean(axis=0), [1.0, 2.0, 3.0], atol=1e-15)
     np.testing.assert_allclose(np.ptp(centres[:, 1]), L - 2 * brick.radius, rtol=1e-12)  # length now along y
+
+
+def test_batched_kabsch_recovers_known_rotations() -> None:
+    """The dump reader's batched fit gives back the rotations that placed the template."""
+    from scipy.spatial.transform import Rotation
+
+    from orchestrator.engines.liggghts import kabsch_quaternions
+
+    template = BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1)).centres
+    truth = Rotation.random(200, random_state=3)
+    world = np.stack([r.apply(template) for r in truth])
+    x, y, z, w = truth.as_quat().T
+    expected = np.stack([w, x, y, z], axis=1)
+    expected[expected[:, 0] < 0] *= -1
+    found = kabsch_quaternions(world, np.broadcast_to(template, world.shape))
+    np.testing.assert_allclose(found, expected, atol=1e-12)

@@ -80,3 +80,21 @@ def test_both_engines_give_one_layout_and_one_trajectory(tmp_path: Path) -> None
     # steps). Tolerance 1e-5 m = 0.01 % of the 10 cm slid; velocities within 1e-4 m/s of ~0.7 m/s.
     np.testing.assert_allclose(a.position, b.position, atol=1e-5)
     np.testing.assert_allclose(a.velocity, b.velocity, atol=1e-4)
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_binary_dump_keeps_every_whole_frame_and_drops_a_cut_one(tmp_path: Path) -> None:
+    """LIGGGHTS writes a binary dump; a frame cut short (engine killed mid-write) is dropped, the rest read."""
+    from orchestrator.engines.liggghts import DUMP_NAME, SPHERE_COLUMNS, read_binary_dump
+
+    run_case(free_fall_case("liggghts"), tmp_path, tmp_path / "run")
+    path = tmp_path / "run" / DUMP_NAME
+    steps, frames = read_binary_dump(path, len(SPHERE_COLUMNS))
+    assert len(steps) == 11 and all(f.shape == (1, len(SPHERE_COLUMNS)) for f in frames)
+    z = np.array([f[0, SPHERE_COLUMNS.index("z")] for f in frames])
+    t = np.array(steps) * 1e-5
+    np.testing.assert_allclose(z, 1.0 - 0.5 * G * t**2, rtol=0, atol=1e-9)  # full double precision kept
+    cut = tmp_path / "cut.bin"
+    cut.write_bytes(path.read_bytes()[:-20])
+    assert read_binary_dump(cut, len(SPHERE_COLUMNS))[0] == steps[:-1]

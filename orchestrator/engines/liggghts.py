@@ -18,7 +18,10 @@ from .base import EngineError, EngineInfo, ProgressCallback, require_executable,
 
 DECK_NAME = "in.liggghts"
 DATA_NAME = "data.spheres"
-DUMP_NAME = "frames.dump"
+DUMP_NAME = "frames.bin"  # binary `dump custom` (LIGGGHTS writes binary when the name ends in .bin)
+TEXT_DUMP_NAME = "frames.dump"  # runs made before the binary dump; still read
+SPHERE_COLUMNS = ("id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz")
+CLUMP_COLUMNS = ("id", "id_multisphere", *SPHERE_COLUMNS[1:])
 STATE_NAME = "state.restart"  # written at the end when the case has `save_state`
 INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from, linked into the run
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
@@ -214,6 +217,7 @@ class LiggghtsAdapter:
             "law": case.law.value,
             "data_file": DATA_NAME,
             "dump_file": DUMP_NAME,
+            "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
             "skin": float(max(_sphere_radii(case))),
             "dt": prepared.schedule.dt,
             "gravity_magnitude": magnitude,
@@ -303,7 +307,11 @@ class LiggghtsAdapter:
         deck = rundir / DECK_NAME
         case = common.saved_case(rundir)
         dt = physics.schedule(case).dt
-        steps, columns, frames = read_dump(rundir / DUMP_NAME)
+        if (rundir / DUMP_NAME).exists():
+            columns = list(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
+            steps, frames = read_binary_dump(rundir / DUMP_NAME, len(columns))
+        else:
+            steps, columns, frames = read_dump(rundir / TEXT_DUMP_NAME)
         if not frames:
             raise EngineError("the engine wrote no dump frames", deck, rundir / "engine.log")
         column = {name: i for i, name in enumerate(columns)}
@@ -343,15 +351,15 @@ def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarr
 
 
 def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Body states from the per-sphere dump of multisphere clumps.
+    """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once.
 
     Centre: mean of the sphere centres (the layouts are symmetric about the brick centre). Velocity:
     mean sphere velocity. Spin: the spheres carry their body's. Orientation: the rotation that best
-    maps the template's sphere centres onto the dumped ones (Kabsch, scipy align_vectors), as a
+    maps the template's sphere centres onto the dumped ones (Kabsch, by a batched SVD), as a
     (w, x, y, z) quaternion of the brick frame. Bodies are matched to the case's clumps by their
     nearest requested position in the first frame (insertion places them within 1 mm).
     """
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial import cKDTree
 
     clumps = case.bodies.clumps
     templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
@@ -359,23 +367,59 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
     position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))
     orientation = np.full(shape + (4,), np.nan)
     requested = np.array([c.position for c in clumps])
-    slot_of: dict[int, int] = {}
+    xyz, vxyz, wxyz = (slice(column[a], column[a] + 3) for a in ("x", "vx", "omegax"))
+    body_column, id_column = column["id_multisphere"], column["id"]
+    slot_of = np.full(1, -1, dtype=np.int64)  # body id → clump slot (-1: not seen yet)
+    stacked: dict[int, np.ndarray] = {}  # sphere count → (clumps, spheres, 3) templates, by slot
     for f, rows in enumerate(frames):
-        rows = rows[np.argsort(rows[:, 0], kind="stable")]  # atom id order = template sphere order
-        bodies = rows[:, column["id_multisphere"]].astype(np.int64)
-        for body in np.unique(bodies):
-            atoms = rows[bodies == body]
-            centre = atoms[:, column["x"] : column["z"] + 1].mean(axis=0)
-            if int(body) not in slot_of:
-                slot_of[int(body)] = int(np.argmin(np.linalg.norm(requested - centre, axis=1)))
-            k = slot_of[int(body)]
-            position[f, k] = centre
-            velocity[f, k] = atoms[:, column["vx"] : column["vz"] + 1].mean(axis=0)
-            spin[f, k] = atoms[0, column["omegax"] : column["omegaz"] + 1]
-            rotation, _ = Rotation.align_vectors(atoms[:, column["x"] : column["z"] + 1] - centre, templates[k])
-            x, y, z, w = rotation.as_quat()
-            orientation[f, k] = (w, x, y, z) if w >= 0 else (-w, -x, -y, -z)
+        # `dump_modify sort id` and clumps inserted one at a time: usually sorted by body already.
+        keys = rows[:, body_column]
+        if not (np.all(np.diff(keys) >= 0) and np.all(np.diff(rows[:, id_column]) > 0)):
+            rows = rows[np.lexsort((rows[:, id_column], keys))]  # by body, then atom id = template order
+            keys = rows[:, body_column]
+        bodies_all = keys.astype(np.int64)
+        starts = np.flatnonzero(np.r_[True, np.diff(bodies_all) != 0])
+        counts = np.diff(np.r_[starts, len(rows)])
+        bodies = bodies_all[starts]
+        if bodies.max() >= len(slot_of):
+            slot_of = np.concatenate([slot_of, np.full(bodies.max() + 1 - len(slot_of), -1, dtype=np.int64)])
+        for size in np.unique(counts):  # bodies of one sphere count form one batch
+            chosen = counts == size
+            index = starts[chosen][:, None] + np.arange(size)[None, :]
+            group = rows[index]  # (bodies, spheres, columns)
+            centre = group[:, :, xyz].mean(axis=1)
+            ids = bodies[chosen]
+            new = slot_of[ids] < 0
+            if new.any():
+                _, nearest = cKDTree(requested).query(centre[new])
+                slot_of[ids[new]] = np.atleast_1d(nearest)
+            slots = slot_of[ids]
+            position[f, slots] = centre
+            velocity[f, slots] = group[:, :, vxyz].mean(axis=1)
+            spin[f, slots] = group[:, 0, wxyz]
+            if int(size) not in stacked:
+                stacked[int(size)] = np.stack([c if len(c) == size else np.full((size, 3), np.nan) for c in templates])
+            orientation[f, slots] = kabsch_quaternions(group[:, :, xyz] - centre[:, None, :], stacked[int(size)][slots])
     return position, velocity, spin, orientation
+
+
+def kabsch_quaternions(world: np.ndarray, template: np.ndarray) -> np.ndarray:
+    """(B, 4) quaternions (w, x, y, z; w ≥ 0) of the rotations R minimising Σ |world_i − R template_i|.
+
+    world, template: (B, n, 3), both centred. Kabsch: H = Σ template_i world_iᵀ = U S Vᵀ, then
+    R = V diag(1, 1, det(V Uᵀ)) Uᵀ (no reflection).
+    """
+    from scipy.spatial.transform import Rotation
+
+    h = np.einsum("bni,bnj->bij", template, world)
+    u, _, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(np.einsum("bji,bkj->bik", vt, u)))
+    correction = np.ones((len(h), 3))
+    correction[:, 2] = d
+    rotation = np.einsum("bji,bj,bkj->bik", vt, correction, u)
+    x, y, z, w = Rotation.from_matrix(rotation).as_quat().T
+    quaternion = np.stack([w, x, y, z], axis=1)
+    return np.where(quaternion[:, :1] < 0, -quaternion, quaternion)
 
 
 def read_dump(path: Path) -> tuple[list[int], list[str], list[np.ndarray]]:
@@ -393,9 +437,51 @@ def read_dump(path: Path) -> tuple[list[int], list[str], list[np.ndarray]]:
         if columns and names != columns:
             raise ValueError(f"{path}: dump columns change between frames")
         columns = names
-        data = np.array(parts[8].split(), dtype=float)
+        data = np.fromstring(parts[8], sep=" ")  # C parsing of the whole block, 1.5 × str.split
         if data.size != count * len(columns):
             break  # incomplete last frame
         steps.append(step)
         frames.append(data.reshape(count, len(columns)))
     return steps, columns, frames
+
+
+def read_binary_dump(path: Path, n_columns: int) -> tuple[list[int], list[np.ndarray]]:
+    """Parse a binary `dump custom` file into (steps, per-frame (atoms, columns) arrays).
+
+    Layout of each frame (LIGGGHTS 3.8, LAMMPS of its time): timestep and atom count (int64), the
+    triclinic flag and 6 boundary flags (int32), 6 box bounds (+3 tilts if triclinic; float64), the
+    values per atom and the number of chunks (int32), then per chunk its value count (int32) and
+    its values (float64). A frame cut short by a crash is dropped.
+    """
+    if not path.exists():
+        return [], []
+    raw = path.read_bytes()
+    steps: list[int] = []
+    frames: list[np.ndarray] = []
+    offset, end = 0, len(raw)
+    while offset + 60 <= end:
+        step, atoms = (int(v) for v in np.frombuffer(raw, np.int64, 2, offset))
+        triclinic = int(np.frombuffer(raw, np.int32, 1, offset + 16)[0])
+        offset += 16 + 4 + 24 + 48 + (24 if triclinic else 0)
+        if offset + 8 > end:
+            break
+        size_one, chunks = (int(v) for v in np.frombuffer(raw, np.int32, 2, offset))
+        offset += 8
+        if size_one != n_columns:
+            raise ValueError(f"{path}: {size_one} values per atom, expected {n_columns}")
+        parts = []
+        for _ in range(chunks):
+            if offset + 4 > end:
+                return steps, frames
+            count = int(np.frombuffer(raw, np.int32, 1, offset)[0])
+            offset += 4
+            if offset + 8 * count > end:
+                return steps, frames  # a frame cut short by a crash
+            parts.append(np.frombuffer(raw, np.float64, count, offset))
+            offset += 8 * count
+        data = np.concatenate(parts) if parts else np.empty(0)
+        if data.size != atoms * size_one:
+            break
+        steps.append(step)
+        frames.append(data.reshape(atoms, size_one))
+    return steps, frames
