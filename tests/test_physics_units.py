@@ -39,4 +39,13 @@ def test_auto_time_step_is_a_hundredth_of_the_contact_duration() -> None:
     # The sphere/sphere pair (reduced mass m/2) is the shortest contact, though only one sphere exists.
     assert plan.dt == pytest.approx(0.01 * contact_duration(1e5, mass / 2))
     assert plan.total_steps == plan.frames * plan.output_every
-    assert plan.end_time >= case.time.duration
+    assert plan.frames == math.ceil(case.time.duration / case.time.output_interval - 1e-9)
+    assert abs(plan.end_time - case.time.duration) <= plan.frames * plan.dt / 2
+
+
+def test_schedule_never_adds_an_output_interval_by_rounding() -> None:
+    """0.1 s at 0.02 s output with a step that does not divide 0.02: five intervals, not six."""
+    case = sliding_case("liggghts").model_copy(update={"time": sliding_case("liggghts").time.model_copy(update={"step": 1.975085e-6, "duration": 0.1, "output_interval": 0.02})})
+    plan = schedule(case)
+    assert plan.output_every == 10126 and plan.frames == 5
+    assert plan.end_time == pytest.approx(0.1, abs=5 * plan.dt / 2)
