@@ -29,7 +29,15 @@ from .engines import EngineError
 from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
 from .runner import RESULTS, run_case
 
-REFERENCE = Path(os.environ.get("DEMORCH_REFERENCE", Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"))
+SHARED_REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"
+PACKAGED_REFERENCE = Path(__file__).resolve().parent / "data" / "reference.toml"  # a copy, for installs without shared/
+
+
+def reference_path() -> Path:
+    """The reference numbers: $DEMORCH_REFERENCE, else the project's shared/reference, else the packaged copy."""
+    if "DEMORCH_REFERENCE" in os.environ:
+        return Path(os.environ["DEMORCH_REFERENCE"])
+    return SHARED_REFERENCE if SHARED_REFERENCE.is_file() else PACKAGED_REFERENCE
 
 
 class GeometrySpec(Strict):
@@ -325,5 +333,9 @@ def released_ratio(trajectory: Trajectory, first_frame: int) -> float:
 
 
 def load_reference() -> dict[str, Any]:
-    with open(REFERENCE, "rb") as stream:
-        return tomllib.load(stream)
+    path = reference_path()
+    try:
+        with open(path, "rb") as stream:
+            return tomllib.load(stream)
+    except (OSError, tomllib.TOMLDecodeError) as error:
+        raise CaseError(f"reference numbers: cannot read {path} ({error}); unset DEMORCH_REFERENCE to use the packaged copy") from None

@@ -160,11 +160,14 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
         _fail(str(error))
     except EngineError as error:
         _fail(str(error), code=3)
-    page = write_study_report(outdir, report, study.geometry.slope_deg)
     packing = report.get("packing", {})
     if packing.get("directory"):
         console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
-    console.print(study_table(f"{study.name} on {study.engine.value}", report))
+    try:
+        page = write_study_report(outdir, report, study.geometry.slope_deg)
+        console.print(study_table(f"{study.name} on {study.engine.value}", report))
+    except CaseError as error:
+        _fail(f"{error} (the run itself is complete: {outdir / 'report.json'})")
     console.print(f"report: {page}")
 
 
@@ -185,12 +188,15 @@ def post(rundir: Path, as_json: bool) -> None:
     """Print summary metrics of a finished run (or avalanche study) directory."""
     if (rundir / "report.json").exists():
         report = json.loads((rundir / "report.json").read_text())
-        page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
-        if as_json:
-            console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
-        else:
-            console.print(study_table(rundir.name, report))
-            console.print(f"report: {page}")
+        try:
+            page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
+            if as_json:
+                console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
+            else:
+                console.print(study_table(rundir.name, report))
+                console.print(f"report: {page}")
+        except CaseError as error:
+            _fail(str(error))
         return
     path = rundir / RESULTS
     if not path.exists():
@@ -344,6 +350,11 @@ def doctor() -> None:
         table.add_row("bilinear contact plugin", "[green]built[/]" if built else "[yellow]not built[/]", details)
     except ImportError:
         table.add_row("bilinear contact plugin", "[yellow]unavailable[/]", "this version has no plugin builder")
+    from .avalanche_study import PACKAGED_REFERENCE, reference_path
+
+    reference = reference_path()
+    origin = "packaged copy" if reference == PACKAGED_REFERENCE else "project"
+    table.add_row("reference numbers", "[green]found[/]" if reference.is_file() else "[red]missing[/]", f"{reference} ({origin})")
     console.print(table)
     if not healthy:
         sys.exit(1)

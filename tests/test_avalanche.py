@@ -150,3 +150,17 @@ def test_engine_override_gives_a_runnable_study() -> None:
     study = with_engine(tiny_study("liggghts"), "yade")
     assert packing_case(study).engine.value == "yade" and packing_case(study).save_state is False
     assert with_engine(study, None) is study
+
+
+def test_reference_numbers_fall_back_to_the_packaged_copy(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """Installed without the project's shared/ folder, reports still have their reference numbers."""
+    import orchestrator.avalanche_study as avalanche_study
+
+    monkeypatch.delenv("DEMORCH_REFERENCE", raising=False)
+    monkeypatch.setattr(avalanche_study, "SHARED_REFERENCE", tmp_path / "absent.toml")
+    assert avalanche_study.reference_path() == avalanche_study.PACKAGED_REFERENCE
+    reference = avalanche_study.load_reference()
+    assert reference["contact"]["richefeu2012"]["brick_support"]["en2"] == 0.53
+    monkeypatch.setenv("DEMORCH_REFERENCE", str(tmp_path / "missing.toml"))
+    with pytest.raises(avalanche_study.CaseError, match=r"reference numbers: cannot read"):
+        avalanche_study.load_reference()
