@@ -10,6 +10,7 @@ bricks with the trap gone flow for `release.duration`; its time starts at the op
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
 import tomllib
@@ -232,7 +233,27 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
     return _case(study, study.name, study.release.duration, study.release.output_interval, _contacts(study.contacts), clumps, walls, **extra)
 
 
-PACKING_LOCK_TIMEOUT_S = 24 * 3600.0
+def packing_key(study: AvalancheStudy) -> str:
+    """Content address of a packing: its case, and what turns that case into engine steps.
+
+    The step schedule, the engine's templates and the engine's version are in the key with the case,
+    so a packing made by other code or another engine build is never taken for this one.
+    """
+    from . import physics
+    from .engines import get_adapter
+    from .render import template_hash
+
+    case = packing_case(study)
+    plan = physics.schedule(case)
+    stamp = {
+        "case": case.model_dump(mode="json"),
+        "schedule": [plan.dt, plan.output_every, plan.frames, plan.total_steps],
+        "templates": template_hash(case.engine.value),
+        "engine_version": get_adapter(case.engine.value).info().version,
+    }
+    return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
+
+
 
 
 def ensure_packing(
@@ -246,7 +267,7 @@ def ensure_packing(
     from .campaign import store
 
     case = packing_case(study)
-    key = store.run_id(case)
+    key = packing_key(study)
     directory = root / key
     root.mkdir(parents=True, exist_ok=True)
     with open(root / f"{key}.lock", "w") as lock:

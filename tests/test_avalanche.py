@@ -131,16 +131,16 @@ def test_packing_law_must_match_the_flow_law() -> None:
 
 def test_packing_key_ignores_what_happens_after_the_opening() -> None:
     """Studies that differ only in the flow's contacts or duration share a packing; a packing input changes it."""
-    from orchestrator.avalanche_study import packing_case
-    from orchestrator.campaign.store import run_id
+    from orchestrator.avalanche_study import packing_key, with_engine
 
     study = tiny_study("liggghts")
     longer = study.model_copy(update={"release": study.release.model_copy(update={"duration": 3.0})})
     other_flow = study.model_copy(update={"contacts": study.contacts.model_copy(update={"law": "bilinear", "brick_brick": study.contacts.brick_brick.model_copy(update={"en2": 0.3})})})
     other_seed = study.model_copy(update={"seed": 7})
-    key = run_id(packing_case(study))
-    assert run_id(packing_case(longer)) == key and run_id(packing_case(other_flow)) == key
-    assert run_id(packing_case(other_seed)) != key
+    key = packing_key(study)
+    assert packing_key(longer) == key and packing_key(other_flow) == key
+    assert packing_key(other_seed) != key
+    assert packing_key(with_engine(study, "yade")) != key  # another engine, another packing
 
 
 def test_engine_override_gives_a_runnable_study() -> None:

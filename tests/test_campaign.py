@@ -174,10 +174,10 @@ def test_avalanche_campaign_shares_one_packing(tmp_path: Path) -> None:
 
 
 def test_example_avalanche_campaign_is_nine_studies_on_one_packing() -> None:
-    from orchestrator.avalanche_study import AvalancheStudy, packing_case
+    from orchestrator.avalanche_study import AvalancheStudy, packing_key
 
     spec, base = load_campaign(REPO / "campaigns" / "avalanche_small_board_contacts.yaml")
     expanded = expand(spec, base)
     assert len(expanded) == 9 and all(isinstance(study, AvalancheStudy) for _, study in expanded)
     assert len({store.run_id(study) for _, study in expanded}) == 9
-    assert len({store.run_id(packing_case(study)) for _, study in expanded}) == 1
+    assert len({packing_key(study) for _, study in expanded}) == 1
