@@ -9,12 +9,21 @@ import numpy as np
 import pytest
 
 from orchestrator.case import Case, parse_case
-from orchestrator.results import read_results
+from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
 
 from conftest import engine_params, slope_vectors, sliding_case
 
 MU = 0.46  # brick/support, Richefeu et al. (2012)
+
+
+def downslope_acceleration(trajectory: Trajectory, angle_deg: float, start: float, end: float = math.inf) -> tuple[float, float]:
+    """(fitted acceleration along the slope between start and end, Coulomb's g (sin α − μ cos α))."""
+    down, _ = slope_vectors(angle_deg)
+    window = (trajectory.time >= start) & (trajectory.time <= end)
+    speed = trajectory.velocity[window, 0, :] @ np.asarray(down)
+    fitted = np.polyfit(trajectory.time[window], speed, 1)[0]
+    return float(fitted), 9.81 * (math.sin(math.radians(angle_deg)) - MU * math.cos(math.radians(angle_deg)))
 
 
 @pytest.mark.parametrize("law", ["linear", "bilinear"])
@@ -36,12 +45,7 @@ def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, law: str, tmp_path
 def test_block_slides_with_kinetic_acceleration_above_mu(engine: str, law: str, tmp_path: Path) -> None:
     angle = math.degrees(math.atan(MU + 0.05))
     run_case(sliding_case(engine, angle, MU, duration=0.3, law=law), tmp_path, tmp_path / "run")
-    trajectory = read_results(tmp_path / "run" / RESULTS)
-    down, _ = slope_vectors(angle)
-    speed = trajectory.velocity[:, 0, :] @ np.asarray(down)
-    moving = trajectory.time >= 0.05
-    acceleration = np.polyfit(trajectory.time[moving], speed[moving], 1)[0]
-    expected = 9.81 * (math.sin(math.radians(angle)) - MU * math.cos(math.radians(angle)))
+    acceleration, expected = downslope_acceleration(read_results(tmp_path / "run" / RESULTS), angle, start=0.05)
     assert acceleration == pytest.approx(expected, rel=0.02)  # issue 3: within 2 %
 
 
@@ -86,9 +90,7 @@ def test_brick_clump_sticks_below_mu_and_slides_above(engine: str, tmp_path: Pat
     assert still.size, "the brick never came to rest below μ"
     rest = int(still[0])
     assert trajectory.time[rest] < 0.6  # measured: 0.37 s (YADE) to 0.47 s (LIGGGHTS)
-    decelerating = (trajectory.time >= 0.15) & (trajectory.time <= trajectory.time[rest] - 0.03)
-    deceleration = np.polyfit(trajectory.time[decelerating], trajectory.velocity[decelerating, 0, :] @ np.asarray(down), 1)[0]
-    expected = 9.81 * (math.sin(math.radians(stick_angle)) - MU * math.cos(math.radians(stick_angle)))
+    deceleration, expected = downslope_acceleration(trajectory, stick_angle, start=0.15, end=trajectory.time[rest] - 0.03)
     assert deceleration == pytest.approx(expected, rel=0.02)  # kinetic friction while it still slides
     travel = (trajectory.position[-1, 0] - trajectory.position[rest, 0]) @ np.asarray(down)
     # Elastic creep of the tangential springs is ~1e-7 m; sliding would cover ~1 cm in 0.2 s.
@@ -97,10 +99,5 @@ def test_brick_clump_sticks_below_mu_and_slides_above(engine: str, tmp_path: Pat
 
     slide_angle = math.degrees(math.atan(MU + 0.05))
     run_case(brick_on_incline_case(engine, slide_angle, MU), tmp_path, tmp_path / "slide")
-    trajectory = read_results(tmp_path / "slide" / RESULTS)
-    down, _ = slope_vectors(slide_angle)
-    speed = trajectory.velocity[:, 0, :] @ np.asarray(down)
-    moving = trajectory.time >= 0.15
-    acceleration = np.polyfit(trajectory.time[moving], speed[moving], 1)[0]
-    expected = 9.81 * (math.sin(math.radians(slide_angle)) - MU * math.cos(math.radians(slide_angle)))
+    acceleration, expected = downslope_acceleration(read_results(tmp_path / "slide" / RESULTS), slide_angle, start=0.15)
     assert acceleration == pytest.approx(expected, rel=0.02)  # issue 3: within 2 %
