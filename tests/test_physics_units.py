@@ -49,3 +49,13 @@ def test_schedule_never_adds_an_output_interval_by_rounding() -> None:
     plan = schedule(case)
     assert plan.output_every == 10126 and plan.frames == 5
     assert plan.end_time == pytest.approx(0.1, abs=5 * plan.dt / 2)
+
+
+def test_default_step_is_50_per_contact_for_the_bilinear_law_on_liggghts_only() -> None:
+    """The compiled bilinear law needs no damping term: 50 steps per contact; dashpots keep 100."""
+    bilinear = sliding_case("liggghts", law="bilinear")
+    duration = schedule(bilinear).dt / 0.02
+    assert schedule(sliding_case("yade", law="bilinear")).dt == pytest.approx(0.01 * duration)
+    assert schedule(sliding_case("liggghts", law="linear")).dt == pytest.approx(0.01 * duration)
+    chosen = bilinear.model_copy(update={"time": bilinear.time.model_copy(update={"safety_factor": 0.005})})
+    assert schedule(chosen).dt == pytest.approx(0.005 * duration)  # a case's own factor wins
