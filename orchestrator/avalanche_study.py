@@ -25,9 +25,9 @@ from . import deposit, front
 from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_height, rain_positions
 from .bricks import BrickClump
 from .case import Case, CaseError, Engine, Name, Real, Strict, _format_error, parse_case
-from .results import Trajectory, read_results
 from .engines import EngineError
 from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
+from .results import Trajectory, read_results
 from .runner import RESULTS, run_case
 
 SHARED_REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"
@@ -216,15 +216,14 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
     (its contacts start afresh at the opening).
     """
     _, _, height = _initial_layout(study)
-    last = -1
     clumps = [
         {
             "shape": "brick",
             "material": "brick",
-            "position": packed.position[last, k].tolist(),
-            "orientation": packed.orientation[last, k].tolist(),
-            "velocity": packed.velocity[last, k].tolist(),
-            "angular_velocity": packed.angular_velocity[last, k].tolist(),
+            "position": packed.position[-1, k].tolist(),
+            "orientation": packed.orientation[-1, k].tolist(),
+            "velocity": packed.velocity[-1, k].tolist(),
+            "angular_velocity": packed.angular_velocity[-1, k].tolist(),
         }
         for k in range(packed.n_bodies)
     ]
@@ -234,7 +233,12 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
 
 
 def packing_key(study: AvalancheStudy) -> str:
-    """Content address of a packing: its case, and what turns that case into engine steps.
+    """Content address of the packing of `study` (see case_key)."""
+    return case_key(packing_case(study))
+
+
+def case_key(case: Case) -> str:
+    """Content address of a packing case: the case, and what turns that case into engine steps.
 
     The step schedule, the engine's templates and the engine's version are in the key with the case,
     so a packing made by other code or another engine build is never taken for this one.
@@ -243,7 +247,6 @@ def packing_key(study: AvalancheStudy) -> str:
     from .engines import get_adapter
     from .render import template_hash
 
-    case = packing_case(study)
     plan = physics.schedule(case)
     stamp = {
         "case": case.model_dump(mode="json"),
@@ -252,8 +255,6 @@ def packing_key(study: AvalancheStudy) -> str:
         "engine_version": get_adapter(case.engine.value).info().version,
     }
     return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
-
-
 
 
 def ensure_packing(
@@ -267,13 +268,14 @@ def ensure_packing(
     from .campaign import store
 
     case = packing_case(study)
-    key = packing_key(study)
+    key = case_key(case)
     directory = root / key
     root.mkdir(parents=True, exist_ok=True)
     with open(root / f"{key}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         state = store.status(directory)
-        if state == "completed" and _state_file_ok(study, directory):
+        state_file = packing_state_file(study, directory)
+        if state == "completed" and (state_file is None or state_file.is_file()):
             return directory, True
         if directory.exists():
             store.retire(directory, root)
@@ -284,8 +286,9 @@ def ensure_packing(
     return directory, False
 
 
-def _state_file_ok(study: AvalancheStudy, directory: Path) -> bool:
-    return study.engine is not Engine.liggghts or (directory / LIGGGHTS_STATE).is_file()
+def packing_state_file(study: AvalancheStudy, packing_dir: Path) -> Path | None:
+    """The state file a release starts from: LIGGGHTS' restart; None for YADE (exact placement)."""
+    return packing_dir / LIGGGHTS_STATE if study.engine is Engine.liggghts else None
 
 
 def run_study(
@@ -310,7 +313,7 @@ def run_study(
         packed = read_results(packing_dir / RESULTS)
         if not np.isfinite(packed.position[-1]).all():
             raise CaseError(f"packing {packing_dir}: some bricks left the box while settling; check the study geometry")
-        state = packing_dir / LIGGGHTS_STATE if study.engine is Engine.liggghts else None
+        state = packing_state_file(study, packing_dir)
         packing_record.write_text(json.dumps({"directory": str(packing_dir), "reused": reused}, indent=2) + "\n")
         run_case(release_case(study, packed, state), outdir, rundir, progress=progress("release") if progress else None, timeout=timeout)
     trajectory = read_results(rundir / RESULTS)

@@ -280,7 +280,8 @@ class LiggghtsAdapter:
 
     def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
         deck = rundir / DECK_NAME
-        plan = physics.schedule(common.saved_case(rundir))
+        case = common.saved_case(rundir)
+        plan = physics.schedule(case)
         dt, total = plan.dt, plan.total_steps
         watcher = ThermoWatcher(dt)
         env = dict(os.environ)
@@ -291,7 +292,6 @@ class LiggghtsAdapter:
         tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout)
         if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
             lost = watcher.first_atoms - watcher.last_atoms
-            case = common.saved_case(rundir)
             what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {_spheres_per_clump(case)})"
             raise EngineError(
                 f"{what} left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
