@@ -9,8 +9,6 @@ bricks with the trap gone flow for `release.duration`; its time starts at the op
 
 from __future__ import annotations
 
-import fcntl
-import hashlib
 import json
 import os
 import tomllib
@@ -28,6 +26,7 @@ from .case import Case, CaseError, Engine, Name, Real, Strict, _format_error, pa
 from .engines import EngineError
 from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
 from .results import Trajectory, read_results
+from .reuse import case_key, ensure_run
 from .runner import RESULTS, run_case
 
 SHARED_REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"
@@ -237,53 +236,11 @@ def packing_key(study: AvalancheStudy) -> str:
     return case_key(packing_case(study))
 
 
-def case_key(case: Case) -> str:
-    """Content address of a packing case: the case, and what turns that case into engine steps.
-
-    The step schedule, the engine's templates and the engine's version are in the key with the case,
-    so a packing made by other code or another engine build is never taken for this one.
-    """
-    from . import physics
-    from .engines import get_adapter
-    from .render import template_hash
-
-    plan = physics.schedule(case)
-    stamp = {
-        "case": case.model_dump(mode="json"),
-        "schedule": [plan.dt, plan.output_every, plan.frames, plan.total_steps],
-        "templates": template_hash(case.engine.value),
-        "engine_version": get_adapter(case.engine.value).info().version,
-    }
-    return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
-
-
 def ensure_packing(
     study: AvalancheStudy, root: Path, progress: Callable[[float, float], None] | None = None, timeout: float | None = None
 ) -> tuple[Path, bool]:
-    """The settled packing of `study` under root/<key>/, run once and then reused. Returns (directory, reused).
-
-    A lock file serialises processes that need the same packing (campaign workers, say): the first
-    runs it, the others wait and reuse it. A failed or interrupted attempt is moved to root/attic.
-    """
-    from .campaign import store
-
-    case = packing_case(study)
-    key = case_key(case)
-    directory = root / key
-    root.mkdir(parents=True, exist_ok=True)
-    with open(root / f"{key}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        state = store.status(directory)
-        state_file = packing_state_file(study, directory)
-        if state == "completed" and (state_file is None or state_file.is_file()):
-            return directory, True
-        if directory.exists():
-            store.retire(directory, root)
-        try:
-            run_case(case, root, directory, progress=progress, timeout=timeout)
-        except EngineError as error:
-            raise EngineError(f"the packing run failed: {error.summary}", error.deck, error.log, error.tail) from None
-    return directory, False
+    """The settled packing of `study` under root/<key>/, run once and then reused. Returns (directory, reused)."""
+    return ensure_run(packing_case(study), root, "packing", lambda directory: packing_state_file(study, directory), progress, timeout)
 
 
 def packing_state_file(study: AvalancheStudy, packing_dir: Path) -> Path | None:

@@ -110,6 +110,8 @@ class Sphere(Strict):
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
     # A sphere that cannot rotate slides like a block: the sliding-friction check needs it.
     fixed_rotation: bool = False
+    # Glued: the sphere never moves (it still touches others). The rough bed of a collapse channel.
+    fixed: bool = False
 
 
 class BrickShape(Strict):
@@ -231,6 +233,10 @@ class Case(Strict):
     # file). `bodies` must then list the bodies as they are in that state, in the same order; the
     # state's simulation box is kept. YADE needs no state file: it places clumps exactly.
     initial_state: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
+    # 2D: bodies move in the x-z plane only (no y motion, spin about y only). Spheres whose centres
+    # lie in y = const stay there by symmetry; YADE also blocks those degrees of freedom, LIGGGHTS
+    # zeroes the y force.
+    planar: bool = False
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":

@@ -374,5 +374,13 @@ def build_contact(force: bool) -> None:
     console.print_json(json.dumps(plugin_status(), default=str))
 
 
+def _register_collapse() -> None:
+    from .cli_collapse import collapse
+
+    main.add_command(collapse)
+
+
+_register_collapse()
+
 if __name__ == "__main__":
     main()

@@ -56,7 +56,8 @@ def test_good_case_files_load() -> None:
 @pytest.mark.parametrize(
     "command",
     [["run"], ["render"], ["post"], ["doctor"], ["build-contact"], ["demo"], ["avalanche"],
-     ["campaign", "run"], ["campaign", "status"], ["campaign", "table"], ["campaign", "plot"], ["campaign", "calibrate"]],
+     ["campaign", "run"], ["campaign", "status"], ["campaign", "table"], ["campaign", "plot"], ["campaign", "calibrate"],
+     ["collapse", "run"], ["collapse", "calibrate"], ["collapse", "plot"]],
     ids=" ".join,
 )
 def test_every_documented_command_exists(command: list[str]) -> None:

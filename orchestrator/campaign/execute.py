@@ -22,26 +22,26 @@ from ..case import Case, CaseError
 from ..engines.base import EngineError, die_with_parent
 from ..runner import RESULTS, RUN_RECORD, run_case, write_json_atomic
 from . import store
-from .spec import base_kind, expand, load_campaign
+from .spec import STUDY_KINDS, base_kind, expand, load_campaign
 
 
 def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case") -> dict[str, Any]:
-    """Run one case or avalanche study in `directory` (any process); never raises for an engine or case failure."""
+    """Run one case, avalanche or collapse study in `directory` (any process); never raises for an engine or case failure."""
     path = Path(directory)
     path.mkdir(parents=True, exist_ok=True)
     pid_file = path / store.WORKER_PID
     pid_file.write_text(str(os.getpid()))
     started = time.perf_counter()
     try:
-        if kind == "avalanche":
-            record = perform_study(point_json, path, started, timeout)
+        if kind in STUDY_KINDS:
+            record = perform_study(kind, point_json, path, started, timeout)
         else:
             case = Case.model_validate_json(point_json)
             record = run_case(case, Path(case_dir), path, timeout=timeout)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
         summary = error.summary if isinstance(error, EngineError) else str(error)
-        if isinstance(error, CaseError) or kind == "avalanche":
+        if isinstance(error, CaseError) or kind != "case":
             tail = error.tail if isinstance(error, EngineError) else []
             write_json_atomic(path / RUN_RECORD, {"status": "failed", "error": summary, "log_tail": tail})
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
@@ -49,28 +49,38 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
         pid_file.unlink(missing_ok=True)
 
 
-def perform_study(study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
-    """An avalanche study as one campaign run: packings shared in <campaign>/packings, a summary run.json.
+def perform_study(kind: str, study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
+    """An avalanche or collapse study as one campaign run, with a summary run.json.
 
-    The summary points at the release's results (run/results.h5) and holds the study's scalar
-    metrics (deposit, front, packing), so the index and the plots treat it like any run.
+    The study's preparation (an avalanche's packing, a collapse's rained column) is shared by every
+    run of the campaign in <campaign>/packings or <campaign>/preparations. The summary points at the
+    release's results (run/results.h5) and holds the study's scalar metrics, so the index and the
+    plots treat it like any run.
     """
-    from ..avalanche_study import AvalancheStudy, run_study
+    shared_root = path.parent.parent
+    if kind == "avalanche":
+        from ..avalanche_study import AvalancheStudy, run_study
 
-    study = AvalancheStudy.model_validate_json(study_json)
-    report = run_study(study, path, packings=path.parent.parent / "packings", timeout=timeout)
+        report = run_study(AvalancheStudy.model_validate_json(study_json), path, packings=shared_root / "packings", timeout=timeout)
+        shared, metrics = report["packing"], study_metrics(report)
+    else:
+        from ..collapse import CollapseStudy
+        from ..collapse_study import collapse_metrics, run_collapse
+
+        report = run_collapse(CollapseStudy.model_validate_json(study_json), path, preparations=shared_root / "preparations", timeout=timeout)
+        shared, metrics = report["preparation"], collapse_metrics(report)
     release = json.loads((path / "run" / RUN_RECORD).read_text())
     record = {
         "status": "completed",
-        "kind": "avalanche",
+        "kind": kind,
         "results": f"run/{RESULTS}",
         "engine": release.get("engine"),
         "engine_version": release.get("engine_version"),
         "contact_build": release.get("contact_build"),
         "wall_time_s": time.perf_counter() - started,
-        "packing": report["packing"].get("directory"),
-        "packing_reused": report["packing"].get("reused"),
-        "metrics": study_metrics(report),
+        "preparation": shared.get("directory"),
+        "preparation_reused": shared.get("reused"),
+        "metrics": metrics,
     }
     write_json_atomic(path / RUN_RECORD, record)
     return record
@@ -114,7 +124,7 @@ class Plan:
     case_dir: Path
     timeout: float | None
     points: dict[str, dict[str, Any]]
-    cases: dict[str, Any]  # validated cases, or avalanche studies when kind is "avalanche"
+    cases: dict[str, Any]  # validated cases, or avalanche / collapse studies when kind says so
     kind: str
     to_run: list[str]
     skipped: dict[str, str]  # run id -> why (completed, running elsewhere, failed)

@@ -64,10 +64,12 @@ Design = Annotated[Union[GridDesign, ZipDesign, SampledDesign], Field(discrimina
 
 class CampaignSpec(Strict):
     name: Name
-    base: str  # a case file or an avalanche study file, relative to the campaign file
-    # What `base` is: a case, or an avalanche study (packing + release + measures; its runs share
-    # packings). `auto`: a study when the file has `packing`, `release` or `geometry` and no `bodies`.
-    kind: Literal["auto", "case", "avalanche"] = "auto"
+    base: str  # a case file, an avalanche study or a collapse study, relative to the campaign file
+    # What `base` is: a case, an avalanche study (packing + release + measures; its runs share
+    # packings) or a collapse study (its runs share preparations). `auto`: a collapse study when the
+    # file has `column`, `channel` or `grains`; an avalanche study when it has `packing`, `release`,
+    # `geometry` or `brick`; either only without `bodies`.
+    kind: Literal["auto", "case", "avalanche", "collapse"] = "auto"
     engine: Literal["liggghts", "yade"] | None = None
     designs: list[Design] = []
     replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
@@ -76,17 +78,27 @@ class CampaignSpec(Strict):
 
 
 STUDY_KEYS = {"packing", "release", "geometry", "brick"}
+COLLAPSE_KEYS = {"column", "channel", "grains", "bed"}
+STUDY_KINDS = ("avalanche", "collapse")  # kinds whose points are studies (defaults filled in before varying)
 
 
 def base_kind(spec: CampaignSpec, base: dict[str, Any]) -> str:
-    """`case` or `avalanche`: what each point of the campaign runs."""
+    """`case`, `avalanche` or `collapse`: what each point of the campaign runs."""
     if spec.kind != "auto":
         return spec.kind
-    return "avalanche" if isinstance(base, dict) and "bodies" not in base and STUDY_KEYS & set(base) else "case"
+    if not isinstance(base, dict) or "bodies" in base:
+        return "case"
+    if COLLAPSE_KEYS & set(base):
+        return "collapse"
+    return "avalanche" if STUDY_KEYS & set(base) else "case"
 
 
 def validate_point(kind: str, data: dict[str, Any], source: str) -> Any:
-    """A validated case, or a validated avalanche study, from a mapping."""
+    """A validated case, avalanche study or collapse study, from a mapping."""
+    if kind == "collapse":
+        from ..collapse import parse_collapse
+
+        return parse_collapse(data, source=source)
     if kind == "avalanche":
         from ..avalanche_study import AvalancheStudy
 
@@ -206,7 +218,7 @@ def _dotted(node: ast.AST) -> str:
 def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
     """(varied parameters, validated case or study) for every point × replicate, in a stable order."""
     kind = base_kind(spec, base)
-    if kind == "avalanche":  # every field present (defaults filled in), so any study path can vary
+    if kind in STUDY_KINDS:  # every field present (defaults filled in), so any study path can vary
         base = validate_point(kind, base, spec.base).model_dump(mode="json")
     blocks = [design_points(design) for design in spec.designs] or [[{}]]
     points = [dict(itertools.chain.from_iterable(p.items() for p in combo)) for combo in itertools.product(*blocks)]

@@ -208,7 +208,8 @@ class LiggghtsAdapter:
         gravity = np.asarray(case.gravity, dtype=float)
         magnitude = float(np.linalg.norm(gravity))
         direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
-        fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation]
+        fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
+        glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
         context = {
             "name": case.name,
             "materials": [{"name": name, "type": t} for name, t in types.items()],
@@ -224,6 +225,8 @@ class LiggghtsAdapter:
             "gravity_direction": [float(v) for v in direction],
             "walls": walls,
             "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
+            "glued_ids": id_ranges(glued) if glued else "",
+            "planar": case.planar,
             **clump_context(case, types),
             "output_every": prepared.schedule.output_every,
             "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),

@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import physics
 from ..bricks import world_sphere_centres
-from ..case import Case, CaseError, ContactLaw
+from ..case import Case, CaseError, ContactLaw, Sphere
 from ..results import Trajectory
 from . import common
 from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -31,6 +31,14 @@ _PROGRESS = re.compile(r"^DEMORCH_PROGRESS (\S+) (\S+)$")
 def _progress(line: str) -> float | None:
     match = _PROGRESS.match(line)
     return float(match.group(1)) if match else None
+
+
+def _blocked_dofs(sphere: Sphere, planar: bool) -> str:
+    """YADE's blockedDOFs: x y z translations, X Y Z rotations."""
+    blocked = "XYZ" if sphere.fixed_rotation else ""
+    if planar:
+        blocked = "y" + ("XYZ" if sphere.fixed_rotation else "XZ")
+    return blocked
 
 
 class YadeAdapter:
@@ -70,7 +78,8 @@ class YadeAdapter:
             for triangle in triangles
         ]
         spheres = [
-            (s.material, s.radius, s.position, s.velocity, s.angular_velocity, s.fixed_rotation) for s in case.bodies.spheres
+            (s.material, s.radius, s.position, s.velocity, s.angular_velocity, _blocked_dofs(s, case.planar), not s.fixed)
+            for s in case.bodies.spheres
         ]
         clumps = []
         for c in case.bodies.clumps:

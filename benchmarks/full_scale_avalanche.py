@@ -1,0 +1,98 @@
+"""The full-scale random pour (cases/avalanche/random_pour_full.yaml), measured end to end.
+
+Run: .venv/bin/python benchmarks/full_scale_avalanche.py [STUDY.yaml] → docs/benchmarks/full_scale.json,
+the study's report (plots, HTML) under runs/full-scale/, and a progress log in runs/full-scale/progress.log.
+It takes hours: it is a measurement, not a test. Environment: BENCH_OUTPUT (study directory,
+default runs/full-scale), BENCH_RESULT (the JSON), BENCH_ENGINE (override the study's engine).
+
+Why a script of its own: the figure users ask for is the wall time of the real thing (packing plus
+release, until the deposit is at rest), with its steps per second and peak memory, on this machine.
+The throughput benchmark only extrapolates that from short runs of smaller pours.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import resource
+import sys
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from orchestrator import physics  # noqa: E402
+from orchestrator.case import Case  # noqa: E402
+from orchestrator.avalanche_study import load_study, run_study, with_engine  # noqa: E402
+from orchestrator.results import read_results  # noqa: E402
+
+STUDY = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
+RESULT = Path(os.environ.get("BENCH_RESULT", REPO / "docs" / "benchmarks" / "full_scale.json"))
+
+
+def progress_logger(log: Path, started: float) -> Callable[[str], Callable[[float, float], None]]:
+    """A progress factory for run_study that appends one line per simulated 1 % to `log`."""
+
+    def stage(name: str) -> Callable[[float, float], None]:
+        last = [-1]
+
+        def report(done: float, total: float) -> None:
+            percent = int(100 * done / total) if total else 100
+            if percent > last[0]:
+                last[0] = percent
+                with log.open("a") as stream:
+                    stream.write(f"{time.perf_counter() - started:9.1f} s  {name:8s} {percent:3d} %  ({done:.3f} / {total:.3f} s)\n")
+
+        return report
+
+    return stage
+
+
+def stage_record(rundir: Path) -> dict[str, float]:
+    """Steps and engine wall time of one finished stage, from its run.json."""
+    record = json.loads((rundir / "run.json").read_text())
+    schedule = physics.schedule(Case.model_validate(record["case"]))
+    return {"steps": schedule.total_steps, "dt_s": schedule.dt, "engine_wall_s": record.get("engine_wall_time_s"), "wall_s": record.get("wall_time_s")}
+
+
+def main() -> None:
+    study_path = Path(sys.argv[1]) if len(sys.argv) > 1 else STUDY
+    study = with_engine(load_study(study_path), os.environ.get("BENCH_ENGINE"))
+    outdir = Path(os.environ.get("BENCH_OUTPUT", REPO / "runs" / "full-scale"))
+    outdir.mkdir(parents=True, exist_ok=True)
+    log = outdir / "progress.log"
+    started = time.perf_counter()
+    report = run_study(study, outdir, progress=progress_logger(log, started), packings=outdir / "packings")
+    wall = time.perf_counter() - started
+    release = read_results(outdir / "run" / "results.h5")
+    speeds = np.linalg.norm(release.velocity[-1], axis=1)
+    packing_dir = Path(report["packing"]["directory"])
+    result = {
+        "study": str(study_path.relative_to(REPO) if study_path.is_relative_to(REPO) else study_path),
+        "engine": study.engine.value,
+        "bricks": release.n_bodies,
+        "wall_s": wall,
+        "packing": stage_record(packing_dir),
+        "release": stage_record(outdir / "run"),
+        "peak_rss_children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0,
+        "final_max_speed_m_s": float(speeds.max()),
+        "final_mean_speed_m_s": float(speeds.mean()),
+        "deposit": report["deposit"],
+        "front": {key: value for key, value in report.get("front", {}).items() if not isinstance(value, list)},
+        "apparent_density": report["packing"]["apparent_density"],
+        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "python": platform.python_version()},
+    }
+    steps = (result["packing"]["steps"] or 0) + (result["release"]["steps"] or 0)
+    result["steps_per_s"] = steps / wall if steps else None
+    RESULT.parent.mkdir(parents=True, exist_ok=True)
+    RESULT.write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()

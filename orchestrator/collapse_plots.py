@@ -1,0 +1,79 @@
+"""Figures of column collapses: one run (front, velocity, profiles) and a slope × bed campaign (the
+study's Figs 9 and 11: r_f(t)/R0 per slope with one curve per bed thickness, and front velocity)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy.ndimage import uniform_filter1d  # noqa: E402
+
+from .collapse_metrics import FRONT_WINDOW  # noqa: E402
+
+
+def _mark_phases(axis: Any, front: dict[str, Any], key: str) -> None:
+    """Vertical lines at the phase switches: end of acceleration, start of the slow phase, rest."""
+    for name, label, style in (("t_max", "v max", "--"), ("t_slow", "slow phase", ":"), ("t_stop", "rest", "-.")):
+        value = front.get(name)
+        if value is not None and np.isfinite(value):
+            axis.axvline(value, color="grey", linestyle=style, linewidth=1, label=label if key == "legend" else None)
+
+
+def plot_run(report: dict[str, Any], arrays: dict[str, np.ndarray], path: Path) -> Path:
+    """Front position and velocity against time, and the profile h(x) at a few instants."""
+    study, front = report["study"], report["front"]
+    r0 = study["column"]["length"]
+    time = np.asarray(front["time"])
+    figure, (top, middle, bottom) = plt.subplots(3, 1, figsize=(7, 9), constrained_layout=True)
+    top.plot(time, np.asarray(front["position"]) / r0, color="C0")
+    top.set_ylabel("front r_f / R0")
+    _mark_phases(top, front, "legend")
+    top.legend(loc="lower right", fontsize=8)
+    middle.plot(time, front["velocity"], color="C1")
+    middle.set_ylabel("front velocity (m/s)")
+    _mark_phases(middle, front, "")
+    middle.set_xlabel("time since release (s)")
+    edges, thickness = arrays["edges"], arrays["thickness"]
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    for k in np.unique(np.linspace(0, len(thickness) - 1, 5).round().astype(int)):
+        smooth = uniform_filter1d(thickness[k], size=FRONT_WINDOW, mode="nearest")  # the front's 3 d window
+        bottom.plot(centres / r0, smooth * 1000, label=f"t = {arrays['time'][k]:.2f} s")
+    bottom.axvline(0.0, color="grey", linewidth=1)
+    bottom.set_xlabel("x / R0 (from the gate; the column starts at -1)")
+    bottom.set_ylabel("thickness h (mm)")
+    bottom.legend(fontsize=8)
+    title = f"{study['name']}: α = {study['channel']['slope_deg']:g}°, h_i = {1000 * study['bed']['erodible_thickness']:g} mm, runout {report['runout_over_R0']:.2f} R0"
+    figure.suptitle(title, fontsize=10)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path
+
+
+def plot_slope_bed(reports: list[dict[str, Any]], directory: Path) -> list[Path]:
+    """r_f(t)/R0 and front velocity per slope (one panel each), one curve per bed thickness."""
+    by_slope: dict[float, list[dict[str, Any]]] = {}
+    for report in reports:
+        by_slope.setdefault(float(report["study"]["channel"]["slope_deg"]), []).append(report)
+    slopes = sorted(by_slope)
+    written = []
+    for quantity, label, name in (("position", "r_f / R0", "front_position.png"), ("velocity", "front velocity (m/s)", "front_velocity.png")):
+        figure, axes = plt.subplots(1, len(slopes), figsize=(4 * len(slopes), 3.6), sharey=True, squeeze=False, constrained_layout=True)
+        for axis, slope in zip(axes[0], slopes):
+            for report in sorted(by_slope[slope], key=lambda r: r["study"]["bed"]["erodible_thickness"]):
+                front, study = report["front"], report["study"]
+                values = np.asarray(front[quantity]) / (study["column"]["length"] if quantity == "position" else 1.0)
+                axis.plot(front["time"], values, label=f"h_i = {1000 * study['bed']['erodible_thickness']:g} mm")
+            axis.set_title(f"α = {slope:g}°")
+            axis.set_xlabel("time (s)")
+            axis.legend(fontsize=8)
+        axes[0][0].set_ylabel(label)
+        path = directory / name
+        figure.savefig(path, dpi=120)
+        plt.close(figure)
+        written.append(path)
+    return written

@@ -1,0 +1,116 @@
+"""Run a collapse study (prepare once, release, measure) and write its report.
+
+The preparation is content-addressed (`reuse.ensure_run`) and kept under a preparations directory
+(default: beside the study's directory), so a campaign over slopes, frictions or durations of the
+same column rains it once. The release's results stay in outdir/run; the report (report.json,
+profiles.npz, plots) in outdir.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from . import collapse_metrics as cm
+from .case import CaseError
+from .collapse import CollapseStudy, preparation_case, release_case
+from .engines.common import saved_case
+from .results import Trajectory, read_results
+from .reuse import ensure_run
+from .runner import RESULTS, run_case
+
+REPORT = "report.json"
+PROFILES = "profiles.npz"
+
+
+def run_collapse(
+    study: CollapseStudy,
+    outdir: Path,
+    progress: Callable[[str], Callable[[float, float], None] | None] | None = None,
+    preparations: Path | None = None,
+    timeout: float | None = None,
+) -> dict[str, Any]:
+    """Prepare (or reuse the preparation), release, measure. A finished release is reused."""
+    outdir.mkdir(parents=True, exist_ok=True)
+    rundir = outdir / "run"
+    record = outdir / "preparation.json"
+    if not (rundir / RESULTS).exists():
+        root = preparations if preparations is not None else outdir.resolve().parent / "preparations"
+        prepared_case = preparation_case(study)
+        directory, reused = ensure_run(prepared_case, root, "preparation", progress=progress("preparation") if progress else None, timeout=timeout)
+        packed = read_results(directory / RESULTS)
+        if not np.isfinite(packed.position[-1]).all():
+            raise CaseError(f"preparation {directory}: some grains left the channel while settling")
+        record.write_text(json.dumps({"directory": str(directory), "reused": reused}, indent=2) + "\n")
+        run_case(release_case(study, prepared_case, packed), outdir, rundir, progress=progress("release") if progress else None, timeout=timeout)
+    trajectory = read_results(rundir / RESULTS)
+    glued = np.array([sphere.fixed for sphere in saved_case(rundir).bodies.spheres])
+    report, arrays = measure(study, trajectory, glued)
+    report["preparation"] = json.loads(record.read_text()) if record.exists() else {}
+    report["study"] = study.model_dump(mode="json")
+    np.savez_compressed(outdir / PROFILES, **arrays)
+    (outdir / REPORT).write_text(json.dumps(report, indent=2) + "\n")
+    return report
+
+
+def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The report (scalars and curves) and the arrays too big for JSON (h(x, t)); `glued` marks the rough bed."""
+    planar = study.dimension == 2
+    position, velocity = trajectory.position, trajectory.velocity
+    radii = trajectory.radius
+    masses = trajectory.mass
+    start = position[0]
+    mobile = ~glued
+    column = mobile & (start[:, 0] < 0.0)
+    bed = mobile & (start[:, 0] >= 0.0)
+    lost = ~np.isfinite(position[-1]).all(axis=1)
+    fraction = cm.column_fraction(start[column], radii[column], study.column.length, study.column.height, study.column.width, planar, study.bed_top)
+    column_measure = float(cm.grain_measure(radii[column], planar).sum())
+    grid = cm.profile_grid(study.channel.length, study.grains.diameter, 1.0 if planar else study.column.width, fraction, planar,
+                           column_measure, study.column.length)
+    thickness = cm.profiles(np.nan_to_num(position, nan=-1e9), radii, mobile, grid)
+    times = trajectory.time
+    front = cm.front_positions(thickness, grid)
+    speed = cm.front_velocity(times, front)
+    phases = cm.front_phases(times, speed, front)
+    g_normal = 9.81 * math.cos(math.radians(study.channel.slope_deg))
+    energy = [cm.bed_energy_ratio(frame[:, 2], v, masses, bed, g_normal) for frame, v in zip(position, velocity)]
+    entrained = [cm.entrained_mass(frame, start, masses, bed, study.grains.diameter) for frame in position]
+    probes = {f"{at:g}": [cm.static_flowing_interface(frame[:, 2], v[:, 0], frame[:, 0], radii, at, study.grains.diameter)
+                          for frame, v in zip(position, velocity)] for at in (study.column.length, 2 * study.column.length)}
+    final_speeds = np.linalg.norm(velocity[-1][mobile & ~lost], axis=1)
+    report: dict[str, Any] = {
+        "grains": {"glued": int(glued.sum()), "column": int(column.sum()), "bed": int(bed.sum()), "lost": int(lost.sum())},
+        "mass": {"initial": float(masses[mobile].sum()), "final": float(masses[mobile & ~lost].sum()), "column": float(masses[column].sum())},
+        "column_solid_fraction": fraction,
+        "runout": float(front[-1]),
+        "runout_over_R0": float(front[-1] / study.column.length),
+        "front": {"time": times.tolist(), "position": front.tolist(), "velocity": speed.tolist(), **phases,
+                  # the flow reached the end wall: the runout is the channel's, lengthen channel.length
+                  "reached_end": bool(front.max() >= study.channel.length - 3 * study.grains.diameter)},
+        "bed": {
+            "energy_ratio": [None if math.isnan(e) else e for e in energy],
+            "entrained_mass": entrained,
+            "entrained_mass_final": entrained[-1],
+            "interface": probes,
+        },
+        "final_max_speed": float(final_speeds.max()) if final_speeds.size else 0.0,
+    }
+    arrays = {"time": times, "edges": grid.edges, "thickness": thickness, "front": front, "front_velocity": speed}
+    return report, arrays
+
+
+def collapse_metrics(report: dict[str, Any]) -> dict[str, float]:
+    """The scalar numbers of a collapse report, flat, for campaign tables and plots."""
+    front = report["front"]
+    metrics = {"runout": report["runout"], "runout_over_R0": report["runout_over_R0"], "final_max_speed": report["final_max_speed"],
+               "bed.entrained_mass": report["bed"]["entrained_mass_final"], "column_solid_fraction": report["column_solid_fraction"]}
+    for key in ("v_max", "t_max", "x_max", "t_slow", "x_slow", "v_slow", "t_stop", "x_stop"):
+        metrics[f"front.{key}"] = float(front[key])
+    metrics["front.slow_phase"] = float(bool(front["slow_phase"]))
+    metrics["front.at_rest"] = float(bool(front["at_rest"]))
+    return metrics
