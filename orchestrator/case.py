@@ -52,6 +52,14 @@ class Strict(BaseModel):
 class Engine(str, Enum):
     liggghts = "liggghts"
     yade = "yade"
+    cocd = "cocd"  # convex optimisation contact dynamics (orchestrator/cocd): spheres, implicit, no stiffness
+
+
+class CocdSettings(Strict):
+    """The cocd engine's solver: Clarabel (interior point, reference), SCS (first order), PIQP (2D only)."""
+
+    solver: Literal["clarabel", "scs", "piqp"] = "clarabel"
+    tolerance: Real(gt=0.0, le=1e-2) = 1e-8
 
 
 class TimeSettings(Strict):
@@ -237,6 +245,7 @@ class Case(Strict):
     # lie in y = const stay there by symmetry; YADE also blocks those degrees of freedom, LIGGGHTS
     # zeroes the y force.
     planar: bool = False
+    cocd: CocdSettings = CocdSettings()  # used by engine: cocd only
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":

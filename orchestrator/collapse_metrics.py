@@ -109,7 +109,7 @@ def front_positions(thickness: np.ndarray, grid: ProfileGrid) -> np.ndarray:
     return np.array([front_from_profile(edges, (row - thickness[0])[grid.gate :], grid.diameter, grid.min_amount) for row in thickness])
 
 
-def front_velocity(times: np.ndarray, front: np.ndarray, window_s: float = 0.06) -> np.ndarray:
+def front_velocity(times: np.ndarray, front: np.ndarray, window_s: float = 0.1) -> np.ndarray:
     """Smoothed dr_f/dt: a quadratic Savitzky-Golay derivative over `window_s` (odd frame count ≥ 5).
 
     The front moves by whole slices (one d): differences of raw positions are spiky; the window

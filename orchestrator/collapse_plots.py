@@ -20,6 +20,8 @@ def _mark_phases(axis: Any, front: dict[str, Any], key: str) -> None:
     """Vertical lines at the phase switches: end of acceleration, start of the slow phase, rest."""
     for name, label, style in (("t_max", "v max", "--"), ("t_slow", "slow phase", ":"), ("t_stop", "rest", "-.")):
         value = front.get(name)
+        if name == "t_stop" and not front.get("at_rest"):
+            continue  # still moving at the end: no rest to mark
         if value is not None and np.isfinite(value):
             axis.axvline(value, color="grey", linestyle=style, linewidth=1, label=label if key == "legend" else None)
 

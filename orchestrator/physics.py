@@ -158,6 +158,9 @@ def contact_duration(kn: float, mass: float) -> float:
     return math.pi * math.sqrt(mass / kn)
 
 
+COCD_DEFAULT_STEP = 1e-3  # s: the study's 2D step; cocd has no contact duration (no stiffness)
+
+
 def time_step(case: Case) -> float:
     """The case's Δt: given, or safety_factor × the shortest contact duration over touching pairs.
 
@@ -167,6 +170,8 @@ def time_step(case: Case) -> float:
     """
     if case.time.step != "auto":
         return float(case.time.step)
+    if case.engine is Engine.cocd:
+        return COCD_DEFAULT_STEP
     smallest = smallest_masses(case)
     durations = []
     for pair in case.contacts:

@@ -102,8 +102,10 @@ def render(engine: str, template: str, context: dict[str, Any]) -> str:
 def template_hash(engine: str) -> str:
     """sha256 over every template file of an engine: recorded in run.json to tie results to decks."""
     digest = hashlib.sha256()
-    for path in sorted((TEMPLATE_ROOT / engine).rglob("*")):
+    # cocd has no template: its deck is data, and what turns it into steps is the package's solver
+    folder = Path(__file__).resolve().parent / "cocd" if engine == "cocd" else TEMPLATE_ROOT / engine
+    for path in sorted(folder.rglob("*.py") if engine == "cocd" else folder.rglob("*")):
         if path.is_file():
-            digest.update(path.relative_to(TEMPLATE_ROOT).as_posix().encode())
+            digest.update(path.relative_to(folder.parent).as_posix().encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from .base import EngineAdapter, EngineError, EngineInfo
+from .cocd import CocdAdapter
 from .liggghts import LiggghtsAdapter
 from .yade import YadeAdapter
 
-ENGINE_NAMES = ("liggghts", "yade")
+ENGINE_NAMES = ("liggghts", "yade", "cocd")
 
 
 def get_adapter(name: str) -> EngineAdapter:
@@ -14,6 +15,8 @@ def get_adapter(name: str) -> EngineAdapter:
         return LiggghtsAdapter()
     if name == "yade":
         return YadeAdapter()
+    if name == "cocd":
+        return CocdAdapter()
     raise ValueError(f"unknown engine {name!r}; allowed: {', '.join(ENGINE_NAMES)}")
 
 

@@ -1,0 +1,89 @@
+"""Run a COCD deck: `python -m orchestrator.cocd deck.json` in the run directory.
+
+Writes frames.npy (the YADE adapter's frame stream: time, then an (N, 16) array per frame),
+cocd_stats.json (per step: contacts, solver iterations and seconds; the smallest gap seen), and
+prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .solver import Scene, Walls, smallest_gap, step
+
+
+def load_scene(deck: dict) -> Scene:
+    bodies = np.asarray(deck["bodies"], dtype=float)
+    walls = deck["walls"]
+    return Scene(
+        position=bodies[:, 2:5].copy(),
+        velocity=bodies[:, 5:8].copy(),
+        spin=bodies[:, 8:11].copy(),
+        radius=bodies[:, 1].copy(),
+        mass=bodies[:, 0].copy(),
+        material=bodies[:, 11].astype(int),
+        fixed=bodies[:, 12].astype(bool),
+        mu=np.asarray(deck["mu"], dtype=float),
+        walls=Walls(
+            origin=np.asarray([w["origin"] for w in walls], dtype=float).reshape(-1, 3),
+            edge1=np.asarray([w["edge1"] for w in walls], dtype=float).reshape(-1, 3),
+            edge2=np.asarray([w["edge2"] for w in walls], dtype=float).reshape(-1, 3),
+            mu=np.asarray([w["mu"] for w in walls], dtype=float).reshape(len(walls), -1),
+            names=[w["name"] for w in walls],
+            active=np.ones(len(walls), bool),
+        ),
+        gravity=np.asarray(deck["gravity"], dtype=float),
+        planar=bool(deck["planar"]),
+    )
+
+
+def write_frame(stream, scene: Scene, now: float) -> None:
+    rows = np.full((len(scene.mass), 16), np.nan)
+    rows[:, 0] = np.arange(1, len(scene.mass) + 1)
+    rows[:, 1], rows[:, 2] = scene.mass, scene.radius
+    rows[:, 3:6], rows[:, 6:9], rows[:, 9:12] = scene.position, scene.velocity, scene.spin
+    np.save(stream, np.array([now]))
+    np.save(stream, rows)
+    stream.flush()
+
+
+def main(deck_path: str) -> None:
+    deck = json.loads(Path(deck_path).read_text())
+    scene = load_scene(deck)
+    dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
+    removals = {int(w["remove_step"]): [] for w in deck["walls"] if w["remove_step"] is not None}
+    for k, wall in enumerate(deck["walls"]):
+        if wall["remove_step"] is not None:
+            removals[int(wall["remove_step"])].append(k)
+    stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
+    started = time.perf_counter()
+    with open(deck["frames"], "wb") as frames:
+        write_frame(frames, scene, 0.0)
+        for n in range(1, total + 1):
+            for k in removals.get(n - 1, []):
+                scene.walls.active[k] = False
+            result = step(scene, dt, deck["solver"], deck["tolerance"])
+            stats["contacts"].append(result.contacts)
+            stats["iterations"].append(result.iterations)
+            stats["solve_s"].append(result.solve_s)
+            stats["missed"] += result.missed
+            if not np.isfinite(scene.position).all():
+                print("ERROR: non-finite positions: the solver diverged", flush=True)
+                sys.exit(1)
+            stats["smallest_gap"] = min(stats["smallest_gap"], smallest_gap(scene))
+            if n % every == 0:
+                write_frame(frames, scene, n * dt)
+                print(f"DEMORCH_T {n * dt!r}", flush=True)
+    stats["wall_s"] = time.perf_counter() - started
+    Path("cocd_stats.json").write_text(json.dumps(stats) + "\n")
+    print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed {stats['missed']}")
+    print("DEMORCH_DONE", flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])

@@ -1,0 +1,127 @@
+"""COCD adapter: a JSON deck, `python -m orchestrator.cocd`, the frame stream → Trajectory.
+
+COCD (orchestrator/cocd) runs in its own process like the other engines, so timeouts, logs,
+progress and failure handling are the same. It takes spheres (3D) or spheres in one plane (2D,
+`planar`), glued spheres, rectangle walls with orthogonal edges and wall removal; contacts are
+perfectly inelastic with the pair's μ (e_n², k_n and k_t are not used: there is no stiffness).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from .. import physics
+from ..case import Case, CaseError, RectangleWall
+from ..results import Trajectory
+from . import common
+from .base import EngineError, EngineInfo, ProgressCallback, run_engine
+from .yade import read_frames
+
+DECK_NAME = "cocd.json"
+FRAMES_NAME = "frames.npy"
+INSTALL_HINT = ".venv/bin/pip install clarabel scs piqp"
+
+
+def _progress(line: str) -> float | None:
+    if line.startswith("DEMORCH_T "):
+        try:
+            return float(line.split()[1])
+        except (IndexError, ValueError):
+            return float("nan")
+    return None
+
+
+class CocdAdapter:
+    name = "cocd"
+
+    def info(self) -> EngineInfo:
+        try:
+            version = "clarabel " + metadata.version("clarabel")
+        except metadata.PackageNotFoundError:
+            version = None
+        return EngineInfo(name="cocd", executable=sys.executable, version=version, install_hint=INSTALL_HINT)
+
+    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+        if case.bodies.clumps:
+            raise CaseError("bodies.clumps: the cocd engine takes spheres only (clumps: use liggghts or yade)")
+        if case.initial_state:
+            raise CaseError("initial_state: LIGGGHTS only; cocd starts from the bodies as listed")
+        walls = []
+        for i, wall in enumerate(case.walls):
+            if not isinstance(wall, RectangleWall):
+                raise CaseError(f"walls.{i}: the cocd engine takes rectangle walls only")
+            if abs(float(np.dot(wall.edge1, wall.edge2))) > 1e-9 * float(np.linalg.norm(wall.edge1) * np.linalg.norm(wall.edge2)):
+                raise CaseError(f"walls.{i}: the cocd engine needs a rectangle's edges at right angles")
+        plan = physics.schedule(case)
+        common.save_case(case, rundir)
+        materials = [m.name for m in case.materials]
+        index = {name: k for k, name in enumerate(materials)}
+        mu = np.zeros((len(materials), len(materials)))
+        for pair in case.contacts:
+            a, b = (index[name] for name in pair.materials)
+            mu[a, b] = mu[b, a] = pair.mu
+        removal = physics.removal_steps(case, plan)
+        for wall in case.walls:
+            walls.append({
+                "name": wall.name, "origin": list(wall.origin), "edge1": list(wall.edge1), "edge2": list(wall.edge2),
+                "mu": [float(mu[index[wall.material], k]) for k in range(len(materials))],
+                "remove_step": removal.get(wall.name),
+            })
+        bodies = []
+        for sphere in case.bodies.spheres:
+            mass = physics.sphere_mass(sphere, case.material(sphere.material).density)
+            bodies.append([mass, sphere.radius, *sphere.position, *sphere.velocity, *sphere.angular_velocity,
+                           index[sphere.material], 1.0 if sphere.fixed else 0.0])
+        deck = {
+            "name": case.name,
+            "dt": plan.dt,
+            "total_steps": plan.total_steps,
+            "output_every": plan.output_every,
+            "solver": case.cocd.solver,
+            "tolerance": case.cocd.tolerance,
+            "gravity": list(case.gravity),
+            "planar": case.planar,
+            "mu": mu.tolist(),
+            "walls": walls,
+            "bodies": bodies,
+            "frames": FRAMES_NAME,
+        }
+        path = rundir / DECK_NAME
+        path.write_text(json.dumps(deck) + "\n")  # data only: the runner is fixed code
+        return path
+
+    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        deck = rundir / DECK_NAME
+        end_time = physics.schedule(common.saved_case(rundir)).end_time
+        command = [sys.executable, "-u", "-m", "orchestrator.cocd", DECK_NAME]
+        env = dict(__import__("os").environ)
+        env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2]) + (":" + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        tail = run_engine(command, rundir, deck, _progress, end_time, progress, env=env, timeout=timeout,
+                          failure_markers=("ERROR", "Traceback"))
+        if not any(line.startswith("DEMORCH_DONE") for line in tail):
+            raise EngineError("cocd ended without finishing", deck, rundir / "engine.log", tail)
+
+    def read_output(self, rundir: Path) -> Trajectory:
+        times, rows = read_frames(rundir / FRAMES_NAME)
+        if not rows:
+            raise EngineError("cocd wrote no frames", rundir / DECK_NAME, rundir / "engine.log")
+        case = common.saved_case(rundir)
+        stack = np.stack(rows)
+        return Trajectory(
+            time=np.asarray(times),
+            ids=stack[0, :, 0].astype(np.int64),
+            material=common.body_materials(case),
+            mass=stack[0, :, 1].copy(),
+            radius=stack[0, :, 2].copy(),
+            inertia=common.body_inertia(case),
+            position=stack[:, :, 3:6],
+            velocity=stack[:, :, 6:9],
+            angular_velocity=stack[:, :, 9:12],
+            orientation=stack[:, :, 12:16],
+            attrs={"orientation_tracked": False},
+        )
