@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
-from .case import Case, CaseError, Engine, Name, Real, Strict, _format_error, parse_case
+from .case import Case, CaseError, CocdSettings, Engine, Name, Real, Strict, _format_error, parse_case
 from .results import Trajectory
 
 GRAIN, WALL = "grain", "wall"  # one grain material: the rough bed's grains are glued grains (`fixed`)
@@ -101,6 +101,9 @@ class CollapseStudy(Strict):
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
     # default runout by less than the grain size (see the README).
     time_safety_factor: Real(gt=0.0, le=0.5) = 0.05
+    # engine: cocd only (it has no contact stiffness: its step is `cocd_step`, its solver here)
+    cocd: CocdSettings = CocdSettings()
+    cocd_step: Real(gt=0.0, le=0.01) = 1e-3
 
     @model_validator(mode="after")
     def _fits(self) -> "CollapseStudy":
@@ -241,7 +244,9 @@ def _case(study: CollapseStudy, name: str, duration: float, gravity: list[float]
             "name": name,
             "engine": study.engine.value,
             "seed": study.seed,
-            "time": {"duration": duration, "output_interval": min(study.release.output_interval, duration), "safety_factor": study.time_safety_factor},
+            "time": {"duration": duration, "output_interval": min(study.release.output_interval, duration),
+                     **({"step": study.cocd_step} if study.engine is Engine.cocd else {"safety_factor": study.time_safety_factor})},
+            "cocd": study.cocd.model_dump(),
             "gravity": gravity,
             "materials": [{"name": GRAIN, "density": study.grains.density}, {"name": WALL, "density": 2500.0}],
             "contacts": contacts,

@@ -60,7 +60,7 @@ def main(deck_path: str) -> None:
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
             removals[int(wall["remove_step"])].append(k)
-    stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
+    stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
     started = time.perf_counter()
     with open(deck["frames"], "wb") as frames:
         write_frame(frames, scene, 0.0)
@@ -72,6 +72,9 @@ def main(deck_path: str) -> None:
             stats["iterations"].append(result.iterations)
             stats["solve_s"].append(result.solve_s)
             stats["missed"] += result.missed
+            stats["unresolved"] += result.unresolved
+            if result.unresolved:
+                print(f"WARNING: step {n}: {result.unresolved} overlapping pairs were not candidates even after widening the search", flush=True)
             if not np.isfinite(scene.position).all():
                 print("ERROR: non-finite positions: the solver diverged", flush=True)
                 sys.exit(1)
@@ -81,7 +84,7 @@ def main(deck_path: str) -> None:
                 print(f"DEMORCH_T {n * dt!r}", flush=True)
     stats["wall_s"] = time.perf_counter() - started
     Path("cocd_stats.json").write_text(json.dumps(stats) + "\n")
-    print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed {stats['missed']}")
+    print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed-and-redone {stats['missed']} unresolved {stats['unresolved']}")
     print("DEMORCH_DONE", flush=True)
 
 
