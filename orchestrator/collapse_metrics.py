@@ -90,11 +90,9 @@ def profile_grid(channel_length: float, diameter: float, width: float, fraction:
     return ProfileGrid(edges, diameter, width, fraction, planar, amount, gate=behind)
 
 
-def column_fraction(positions: np.ndarray, radii: np.ndarray, length: float, height: float, width: float, planar: bool, base: float) -> float:
-    """Solid fraction of the column at release: grain measure behind the gate over R0 × H0 (× W)."""
-    inside = positions[:, 0] < 0.0
-    total = grain_measure(radii[inside], planar).sum()
-    return float(total / (length * height * (1.0 if planar else width)))
+def column_fraction(radii: np.ndarray, length: float, height: float, width: float, planar: bool) -> float:
+    """Solid fraction of the column at release: its grains' measure over R0 × H0 (× W; 1 in 2D)."""
+    return float(grain_measure(radii, planar).sum() / (length * height * (1.0 if planar else width)))
 
 
 def profiles(positions: np.ndarray, radii: np.ndarray, mobile: np.ndarray, grid: ProfileGrid) -> np.ndarray:

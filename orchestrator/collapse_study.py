@@ -68,7 +68,7 @@ def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray) -> 
     column = mobile & (start[:, 0] < 0.0)
     bed = mobile & (start[:, 0] >= 0.0)
     lost = ~np.isfinite(position[-1]).all(axis=1)
-    fraction = cm.column_fraction(start[column], radii[column], study.column.length, study.column.height, study.column.width, planar, study.bed_top)
+    fraction = cm.column_fraction(radii[column], study.column.length, study.column.height, study.column.width, planar)
     column_measure = float(cm.grain_measure(radii[column], planar).sum())
     grid = cm.profile_grid(study.channel.length, study.grains.diameter, 1.0 if planar else study.column.width, fraction, planar,
                            column_measure, study.column.length)

@@ -137,5 +137,5 @@ def test_bed_energy_ratio_and_entrained_mass() -> None:
 
 
 def test_column_fraction() -> None:
-    positions, radii = planar_layer(-0.1, 0.0, 0.07)
-    assert cm.column_fraction(positions, radii, 0.1, 0.07, 0.0, True, 0.0) == pytest.approx(FRACTION, rel=0.03)
+    _, radii = planar_layer(-0.1, 0.0, 0.07)
+    assert cm.column_fraction(radii, 0.1, 0.07, 0.0, True) == pytest.approx(FRACTION, rel=0.03)

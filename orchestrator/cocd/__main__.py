@@ -56,10 +56,10 @@ def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
     dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
-    removals = {int(w["remove_step"]): [] for w in deck["walls"] if w["remove_step"] is not None}
+    removals: dict[int, list[int]] = {}
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
-            removals[int(wall["remove_step"])].append(k)
+            removals.setdefault(int(wall["remove_step"]), []).append(k)
     stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
     started = time.perf_counter()
     with open(deck["frames"], "wb") as frames:
@@ -78,7 +78,7 @@ def main(deck_path: str) -> None:
             if not np.isfinite(scene.position).all():
                 print("ERROR: non-finite positions: the solver diverged", flush=True)
                 sys.exit(1)
-            stats["smallest_gap"] = min(stats["smallest_gap"], smallest_gap(scene))
+            stats["smallest_gap"] = min(stats["smallest_gap"], result.smallest_gap)
             if n % every == 0:
                 write_frame(frames, scene, n * dt)
                 print(f"DEMORCH_T {n * dt!r}", flush=True)

@@ -22,6 +22,7 @@ well scaled whatever the grain size. Solvers (called directly with scipy.sparse 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,6 +86,7 @@ class StepStats:
     solve_s: float
     missed: int  # contacts found penetrating after the step that were not candidates (the step was redone)
     unresolved: int  # such contacts left after the last retry (the step went on with them)
+    smallest_gap: float  # the smallest sphere/sphere gap after the step (negative: overlap)
 
 
 def find_contacts(scene: Scene, dt: float, scale: float = 1.0) -> Contacts:
@@ -152,8 +154,9 @@ class Layout:
         self.size = self.width * len(self.mobile)
 
     def columns(self, bodies: np.ndarray, vector: np.ndarray, rotation: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(valid rows, columns, values) of the linear form vector · (v or w) of `bodies` (-1 slot: none)."""
-        slot = self.slot[bodies] if len(bodies) else np.zeros(0, int)
+        """(valid rows, columns, values) of the linear form vector · (v or w) of `bodies`; walls (negative
+        ids) and glued bodies have no unknowns and give no entries."""
+        slot = np.where(bodies >= 0, self.slot[np.maximum(bodies, 0)], -1) if len(bodies) else np.zeros(0, int)
         valid = np.flatnonzero(slot >= 0)
         base = slot[valid] * self.width
         if self.planar:
@@ -184,15 +187,11 @@ def _linear_rows(layout: Layout, contacts: Contacts, direction: np.ndarray, with
 
     u_rel = v_j - w_j × n - v_i - w_i × n (w = r ω); d · (w × n) = w · (n × d).
     """
-    blocks = []
     count = len(contacts.i)
-    other = np.where(contacts.j >= 0, contacts.j, -1)
-    blocks.append(layout.columns(contacts.i, -direction, False))
-    blocks.append(layout.columns(np.where(other >= 0, other, 0), np.where((other >= 0)[:, None], direction, 0.0), False))
+    blocks = [layout.columns(contacts.i, -direction, False), layout.columns(contacts.j, direction, False)]
     if with_rotation:
         arm = np.cross(contacts.normal, direction)
-        blocks.append(layout.columns(contacts.i, -arm, True))
-        blocks.append(layout.columns(np.where(other >= 0, other, 0), np.where((other >= 0)[:, None], -arm, 0.0), True))
+        blocks += [layout.columns(contacts.i, -arm, True), layout.columns(contacts.j, -arm, True)]
     rows = np.concatenate([b[0] for b in blocks])
     cols = np.concatenate([b[1] for b in blocks])
     values = np.concatenate([b[2] for b in blocks])
@@ -270,8 +269,6 @@ def assemble(scene: Scene, layout: Layout, contacts: Contacts, dt: float) -> tup
 def step(scene: Scene, dt: float, solver: str = "clarabel", tolerance: float = 1e-8) -> StepStats:
     """Advance the scene by one step (in place). Contacts within the reach of this step are candidates;
     if a penetration appears that no candidate covered, the step is redone with a wider margin."""
-    import time
-
     layout = Layout(scene)
     scale = 1.0
     w = scene.spin * scene.radius[:, None]
@@ -293,7 +290,8 @@ def step(scene: Scene, dt: float, solver: str = "clarabel", tolerance: float = 1
         v, w_new = layout.unpack(u)
         new_position = scene.position.copy()
         new_position[layout.mobile] += dt * v
-        lost = _uncovered_penetrations(scene, new_position, contacts)
+        pairs, gap = touching_pairs(new_position, scene.radius, scene.fixed)
+        lost = _uncovered_penetrations(pairs, gap, 1e-9 * float(scene.radius.mean()), contacts)
         if lost == 0:
             break
         missed += lost
@@ -302,7 +300,8 @@ def step(scene: Scene, dt: float, solver: str = "clarabel", tolerance: float = 1
     scene.position = new_position
     scene.velocity[layout.mobile] = v
     scene.spin[layout.mobile] = w_new / scene.radius[layout.mobile, None]
-    return StepStats(len(contacts.i), iterations, elapsed, missed - unresolved, unresolved)
+    smallest = float(gap.min()) if len(gap) else math.inf
+    return StepStats(len(contacts.i), iterations, elapsed, missed - unresolved, unresolved, smallest)
 
 
 def _free_flight(u0: np.ndarray, scene: Scene, layout: Layout, dt: float) -> np.ndarray:
@@ -315,15 +314,18 @@ def _free_flight(u0: np.ndarray, scene: Scene, layout: Layout, dt: float) -> np.
     return u0 + dt * np.tile(gravity, len(layout.mobile))
 
 
-def _uncovered_penetrations(scene: Scene, position: np.ndarray, contacts: Contacts) -> int:
-    """Pairs overlapping after the step (beyond 1e-9 of the mean radius) that were not candidates."""
-    tolerance = 1e-9 * float(scene.radius.mean())
-    tree = cKDTree(position)
-    pairs = tree.query_pairs(2.0 * float(scene.radius.max()), output_type="ndarray")
-    if len(pairs) == 0:
-        return 0
-    gap = np.linalg.norm(position[pairs[:, 1]] - position[pairs[:, 0]], axis=1) - scene.radius[pairs[:, 0]] - scene.radius[pairs[:, 1]]
-    overlapping = pairs[(gap < -tolerance) & ~(scene.fixed[pairs[:, 0]] & scene.fixed[pairs[:, 1]])]
+def touching_pairs(position: np.ndarray, radius: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(pairs, gaps) of the sphere pairs within reach of touching, at least one of them mobile."""
+    pairs = cKDTree(position).query_pairs(2.0 * float(radius.max()), output_type="ndarray")
+    if len(pairs):
+        pairs = pairs[~(fixed[pairs[:, 0]] & fixed[pairs[:, 1]])]
+    gap = np.linalg.norm(position[pairs[:, 1]] - position[pairs[:, 0]], axis=1) - radius[pairs[:, 0]] - radius[pairs[:, 1]] if len(pairs) else np.zeros(0)
+    return pairs, gap
+
+
+def _uncovered_penetrations(pairs: np.ndarray, gap: np.ndarray, tolerance: float, contacts: Contacts) -> int:
+    """Pairs overlapping after the step (beyond `tolerance`) that were not candidates."""
+    overlapping = pairs[gap < -tolerance]
     if len(overlapping) == 0:
         return 0
     known = set(zip(np.minimum(contacts.i, contacts.j).tolist(), np.maximum(contacts.i, contacts.j).tolist()))
@@ -332,12 +334,5 @@ def _uncovered_penetrations(scene: Scene, position: np.ndarray, contacts: Contac
 
 def smallest_gap(scene: Scene) -> float:
     """The smallest sphere/sphere gap in the scene (negative: overlap), over pairs with a mobile body."""
-    tree = cKDTree(scene.position)
-    pairs = tree.query_pairs(2.0 * float(scene.radius.max()), output_type="ndarray")
-    if len(pairs) == 0:
-        return math.inf
-    pairs = pairs[~(scene.fixed[pairs[:, 0]] & scene.fixed[pairs[:, 1]])]
-    if len(pairs) == 0:
-        return math.inf
-    gap = np.linalg.norm(scene.position[pairs[:, 1]] - scene.position[pairs[:, 0]], axis=1) - scene.radius[pairs[:, 0]] - scene.radius[pairs[:, 1]]
-    return float(gap.min())
+    _, gap = touching_pairs(scene.position, scene.radius, scene.fixed)
+    return float(gap.min()) if len(gap) else math.inf

@@ -9,6 +9,7 @@ perfectly inelastic with the pair's μ (e_n², k_n and k_t are not used: there i
 from __future__ import annotations
 
 import json
+import os
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -99,7 +100,7 @@ class CocdAdapter:
         deck = rundir / DECK_NAME
         end_time = physics.schedule(common.saved_case(rundir)).end_time
         command = [sys.executable, "-u", "-m", "orchestrator.cocd", DECK_NAME]
-        env = dict(__import__("os").environ)
+        env = dict(os.environ)
         env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2]) + (":" + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         tail = run_engine(command, rundir, deck, _progress, end_time, progress, env=env, timeout=timeout,
                           failure_markers=("ERROR", "Traceback"))
