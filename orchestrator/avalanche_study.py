@@ -22,7 +22,7 @@ from pydantic import Field, ValidationError, model_validator
 from . import deposit, front
 from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_height, rain_positions
 from .bricks import BrickClump
-from .case import Case, CaseError, Engine, Name, Real, Strict, _format_error, parse_case
+from .case import Case, CaseError, Engine, Name, Real, RestStop, Strict, _format_error, parse_case
 from .engines import EngineError
 from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
 from .results import Trajectory, read_results
@@ -84,6 +84,8 @@ class PackingSpec(Strict):
     volume: Real(gt=0.0, le=10.0) = 0.04  # m³ of pile at the apparent density below
     apparent_density: Real(gt=0.0, le=1e4) | None = None  # default: 1000 (pour) or 1600 (pile)
     settle_time: Real(gt=0.0, le=100.0) = 1.0
+    # Set: settle_time is an upper bound and the packing ends once the bricks are at rest.
+    stop_at_rest: RestStop | None = None
     # The paper changed contact parameters while packing to reach the target density, then restored
     # them. Default: the study's own contacts. Give them explicitly to share one packing across
     # studies (a campaign) that vary the contacts of the flow only.
@@ -94,6 +96,9 @@ class PackingSpec(Strict):
 class ReleaseSpec(Strict):
     duration: Real(gt=0.0, le=1000.0) = 4.0
     output_interval: Real(gt=0.0, le=10.0) = 0.02
+    # Set: duration is an upper bound and the flow ends once the deposit is at rest (give `after`
+    # > 0: the bricks are at rest in the box at the opening).
+    stop_at_rest: RestStop | None = None
 
 
 class AvalancheStudy(Strict):
@@ -169,15 +174,16 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
     return positions, orientations, height
 
 
-def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, contacts: list[dict[str, Any]],
-          clumps: list[dict[str, Any]], walls: list[dict[str, object]], **extra: Any) -> Case:
+def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, rest: RestStop | None,
+          contacts: list[dict[str, Any]], clumps: list[dict[str, Any]], walls: list[dict[str, object]], **extra: Any) -> Case:
     spec = study.brick
     return parse_case(
         {
             "name": name,
             "engine": study.engine.value,
             "seed": study.seed,
-            "time": {"duration": duration, "output_interval": min(output_interval, duration)},
+            "time": {"duration": duration, "output_interval": min(output_interval, duration),
+                     "stop_at_rest": rest.model_dump() if rest is not None else None},
             "materials": [
                 {"name": "brick", "density": spec.density},
                 {"name": "board", "density": 1400.0},
@@ -203,7 +209,7 @@ def packing_case(study: AvalancheStudy) -> Case:
     positions, orientations, height = _initial_layout(study)
     clumps = [{"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()} for p, q in zip(positions, orientations)]
     walls = study.geometry.build().walls(trap_closed=True, wall_height=height)
-    return _case(study, "packing", study.packing.settle_time, study.release.output_interval,
+    return _case(study, "packing", study.packing.settle_time, study.release.output_interval, study.packing.stop_at_rest,
                  _contacts(study.packing.contacts or study.contacts, study.packing.brick_brick_mu), clumps, walls, save_state=study.engine is Engine.liggghts)
 
 
@@ -228,7 +234,8 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
     ]
     walls = study.geometry.build().walls(trap_closed=False, wall_height=height)
     extra = {"initial_state": str(state_file.resolve())} if state_file is not None else {}
-    return _case(study, study.name, study.release.duration, study.release.output_interval, _contacts(study.contacts), clumps, walls, **extra)
+    return _case(study, study.name, study.release.duration, study.release.output_interval, study.release.stop_at_rest,
+                 _contacts(study.contacts), clumps, walls, **extra)
 
 
 def packing_key(study: AvalancheStudy) -> str:

@@ -62,6 +62,19 @@ class CocdSettings(Strict):
     tolerance: Real(gt=0.0, le=1e-2) = 1e-8
 
 
+class RestStop(Strict):
+    """End the run early once the bodies are at rest, instead of simulating a fixed, generous duration.
+
+    At rest: the root-mean-square speed of the moving bodies, sqrt(Σ m v² / Σ m) (translation; glued
+    spheres excluded), is below `speed`. It is checked every `check_interval` (rounded to whole output
+    intervals) from `after` on, so a pile that starts at rest (a release) is not stopped at t = 0.
+    """
+
+    speed: Real(gt=0.0, le=10.0) = 0.005
+    after: Real(ge=0.0, le=1e4) = 0.0
+    check_interval: Real(gt=0.0, le=1e4) = 0.1
+
+
 class TimeSettings(Strict):
     """Time integration. `step: auto` derives Δt from the stiffest contact and the lightest body."""
 
@@ -72,6 +85,8 @@ class TimeSettings(Strict):
     safety_factor: Real(gt=0.0, le=0.5) | None = None
     duration: Real(gt=0.0, le=1e4)
     output_interval: Real(gt=0.0, le=1e4)
+    # None: run the whole duration. Otherwise the duration is an upper bound (see RestStop).
+    stop_at_rest: RestStop | None = None
 
     @field_validator("step", mode="before")
     def _step_auto_or_range(cls, value: object) -> object:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any, Callable
@@ -15,7 +16,7 @@ from rich.table import Table
 
 from . import metrics
 from .case import CaseError, load_case
-from .engines import ENGINE_NAMES, EngineError, get_adapter
+from .engines import ENGINE_NAMES, MPI_ENV, EngineError, get_adapter
 from .results import read_results
 from .runner import RESULTS, render_case, run_case, with_engine
 
@@ -80,8 +81,12 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="dem-orchestrator")
-def main() -> None:
+@click.option("--mpi", type=click.IntRange(1, 256), default=None, metavar="N",
+              help=f"Run each LIGGGHTS engine as `mpirun -np N` (same as {MPI_ENV}=N; cases and results do not change).")
+def main(mpi: int | None) -> None:
     """Run LIGGGHTS and YADE from one validated case file."""
+    if mpi is not None:
+        os.environ[MPI_ENV] = str(mpi)
 
 
 @main.command()

@@ -219,6 +219,19 @@ def removal_steps(case: Case, plan: "Schedule") -> dict[str, int]:
     }
 
 
+def rest_check_steps(case: Case, plan: Schedule) -> tuple[int, int] | None:
+    """(steps between rest checks, step of the first check), whole output intervals counted like the
+    frames (requested interval), so each check is a recorded frame and a stop leaves the state found
+    at rest as the last frame. The first check is at `after`, or at the start of the last stage (the
+    last wall removal) if that is later. None without stop_at_rest."""
+    rest = case.time.stop_at_rest
+    if rest is None:
+        return None
+    every = max(1, round(rest.check_interval / case.time.output_interval)) * plan.output_every
+    after = max(1, math.ceil(rest.after / case.time.output_interval - 1e-9)) * plan.output_every
+    return every, after
+
+
 def schedule(case: Case) -> Schedule:
     """Steps per output interval (the interval rounded to whole steps) and the number of intervals.
 

@@ -52,6 +52,19 @@ def write_frame(stream, scene: Scene, now: float) -> None:
     stream.flush()
 
 
+def at_rest(scene: Scene, rest: dict | None, n: int, last_stage: int) -> bool:
+    """The case's time.stop_at_rest, checked as the other engines do (see the LIGGGHTS deck)."""
+    first_check = max(rest["after"], last_stage) if rest else 0
+    if not rest or n < first_check or (n - first_check) % rest["every"]:
+        return False
+    moving = ~scene.fixed
+    speed = float(np.sqrt(np.sum(scene.mass[moving] * np.sum(scene.velocity[moving] ** 2, axis=1)) / rest["mass"]))
+    if speed >= rest["speed"]:
+        return False
+    print(f"DEMORCH_AT_REST step {n} speed {speed!r}", flush=True)
+    return True
+
+
 def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
@@ -60,6 +73,7 @@ def main(deck_path: str) -> None:
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
             removals.setdefault(int(wall["remove_step"]), []).append(k)
+    last_stage = max(removals, default=0)
     stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
     started = time.perf_counter()
     with open(deck["frames"], "wb") as frames:
@@ -82,6 +96,9 @@ def main(deck_path: str) -> None:
             if n % every == 0:
                 write_frame(frames, scene, n * dt)
                 print(f"DEMORCH_T {n * dt!r}", flush=True)
+                if at_rest(scene, deck.get("rest"), n, last_stage):
+                    total = n
+                    break
     stats["wall_s"] = time.perf_counter() - started
     Path("cocd_stats.json").write_text(json.dumps(stats) + "\n")
     print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed-and-redone {stats['missed']} unresolved {stats['unresolved']}")

@@ -91,6 +91,7 @@ class CocdAdapter:
             "walls": walls,
             "bodies": bodies,
             "frames": FRAMES_NAME,
+            "rest": common.rest_settings(case, plan),
         }
         path = rundir / DECK_NAME
         path.write_text(json.dumps(deck) + "\n")  # data only: the runner is fixed code
@@ -124,5 +125,5 @@ class CocdAdapter:
             velocity=stack[:, :, 6:9],
             angular_velocity=stack[:, :, 9:12],
             orientation=stack[:, :, 12:16],
-            attrs={"orientation_tracked": False},
+            attrs={"orientation_tracked": False, **common.at_rest_attrs(rundir, physics.schedule(case).dt)},
         )

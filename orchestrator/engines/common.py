@@ -66,5 +66,41 @@ def body_masses(case: Case) -> np.ndarray:
     return np.array([b.mass for b in physics.bodies(case)])
 
 
+def moving_mass(case: Case) -> float:
+    """Total mass of the bodies that can move (glued spheres left out): the M of the rest criterion."""
+    glued = [s.fixed for s in case.bodies.spheres] + [False] * len(case.bodies.clumps)
+    return float(sum(mass for mass, fixed in zip(body_masses(case), glued) if not fixed))
+
+
 def body_inertia(case: Case) -> np.ndarray:
     return np.array([b.inertia for b in physics.bodies(case)])
+
+
+AT_REST_MARKER = "DEMORCH_AT_REST"
+
+
+def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float] | None:
+    """What a YADE script or cocd deck needs to stop at rest: check period and first step (whole output
+    intervals), the speed threshold and the moving mass M. None: run the whole duration."""
+    checks = physics.rest_check_steps(case, plan)
+    if checks is None:
+        return None
+    every, after = checks
+    return {"every": every, "after": after, "speed": case.time.stop_at_rest.speed, "mass": moving_mass(case)}
+
+
+def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
+    """{'stopped_at_rest': time, 'rest_speed': m/s} when the engine ended the run at rest (its log says
+    `DEMORCH_AT_REST step N speed v` or `... time t speed v`), else {}. Only the log's tail is read."""
+    log = rundir / "engine.log"
+    if not log.exists():
+        return {}
+    with log.open("rb") as handle:
+        handle.seek(max(0, log.stat().st_size - 65536))
+        tail = handle.read().decode("utf-8", "replace").splitlines()
+    for line in reversed(tail):
+        words = line.split()
+        if len(words) == 5 and words[0] == AT_REST_MARKER:
+            moment = float(words[2]) * dt if words[1] == "step" else float(words[2])
+            return {"stopped_at_rest": moment, "rest_speed": float(words[4])}
+    return {}

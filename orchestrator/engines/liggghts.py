@@ -146,6 +146,18 @@ def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
     return segments
 
 
+def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) -> dict[str, object] | None:
+    """The deck's stop-at-rest runs over the last segment: up to the first check, whole chunks between
+    checks, then the remainder to the end (None: one `run`)."""
+    rest = common.rest_settings(case, plan)
+    if rest is None:
+        return None
+    start = plan.total_steps - last_segment_steps
+    first = min(max(0, rest["after"] - start), last_segment_steps)
+    chunks, remainder = divmod(last_segment_steps - first, rest["every"])
+    return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "mass": repr(rest["mass"])}
+
+
 class ThermoWatcher:
     """Reads thermo lines (step atoms ke): simulated time for progress, and the atom count."""
 
@@ -210,6 +222,7 @@ class LiggghtsAdapter:
         direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
         fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
         glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
+        segments = run_segments(case, prepared.schedule)
         context = {
             "name": case.name,
             "materials": [{"name": name, "type": t} for name, t in types.items()],
@@ -231,7 +244,8 @@ class LiggghtsAdapter:
             "output_every": prepared.schedule.output_every,
             "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
             "total_steps": prepared.schedule.total_steps,
-            "segments": run_segments(case, prepared.schedule),
+            "segments": segments,
+            "rest": rest_context(case, prepared.schedule, segments[-1]["steps"]),
             "initial_state": INITIAL_STATE_NAME if case.initial_state else "",
             "save_state": case.save_state,
             "state_file": STATE_NAME,
@@ -302,7 +316,8 @@ class LiggghtsAdapter:
                 rundir / "engine.log",
                 tail,
             )
-        if watcher.last_step < total:
+        stopped = common.at_rest_attrs(rundir, dt)
+        if watcher.last_step < total and not (stopped and watcher.last_step == round(stopped["stopped_at_rest"] / dt)):
             raise EngineError(f"the run stopped at step {watcher.last_step} of {total}", deck, rundir / "engine.log", tail)
 
     # -- output ----------------------------------------------------------------------------
@@ -336,7 +351,7 @@ class LiggghtsAdapter:
             velocity=velocity,
             angular_velocity=spin,
             orientation=orientation,
-            attrs={"orientation_tracked": "id_multisphere" in column},
+            attrs={"orientation_tracked": "id_multisphere" in column, **common.at_rest_attrs(rundir, dt)},
         )
 
 

@@ -106,6 +106,7 @@ class YadeAdapter:
             "clumps": clumps,
             "facets": facets,
             "removals": _removals(case, prepared.schedule),
+            "rest": common.rest_settings(case, prepared.schedule),
         }
         script = rundir / SCRIPT_NAME
         script.write_text(render("yade", "case.py.j2", context))
@@ -140,7 +141,7 @@ class YadeAdapter:
             velocity=stack[:, :, 6:9],
             angular_velocity=stack[:, :, 9:12],
             orientation=stack[:, :, 12:16],
-            attrs={"orientation_tracked": True},
+            attrs={"orientation_tracked": True, **common.at_rest_attrs(rundir, physics.schedule(common.saved_case(rundir)).dt)},
         )
 
 
