@@ -23,7 +23,7 @@ from . import deposit, front
 from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_height, rain_positions
 from .bricks import BrickClump
 from .case import Case, CaseError, Engine, Name, Real, RestStop, Strict, _format_error, parse_case
-from .engines import EngineError
+from .engines import EngineError, default_grid
 from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
 from .results import Trajectory, read_results
 from .reuse import case_key, ensure_run
@@ -267,6 +267,20 @@ def run_study(
     A finished release in outdir/run is reused (rerun = report only). Returns the report, also
     written to outdir/report.json.
     """
+    # Under MPI, LIGGGHTS splits the box across the flow (y): the set-up is symmetric about y = 0,
+    # so each process gets half the bricks all along; the default split (along the boards) left one
+    # process with the whole pile (measured: 1.74 × faster on 2 processes, against 1.13 ×).
+    with default_grid("1 * 1"):
+        return _run_study(study, outdir, progress, packings, timeout)
+
+
+def _run_study(
+    study: AvalancheStudy,
+    outdir: Path,
+    progress: Callable[[str], Callable[[float, float], None] | None] | None,
+    packings: Path | None,
+    timeout: float | None,
+) -> dict[str, Any]:
     outdir.mkdir(parents=True, exist_ok=True)
     geometry, brick = study.geometry.build(), study.brick.build()
     rundir = outdir / "run"

@@ -115,3 +115,29 @@ def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
     assert deck.rstrip().endswith("write_restart   state.restart")
     assert deck.index("reset_timestep  0") < deck.index("\nrun ")
     assert (tmp_path / "run" / "initial.restart").read_bytes() == b"state"
+
+
+def test_mpi_settings_reach_the_command_and_the_deck(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """DEMORCH_LIGGGHTS_MPI / _GRID change how LIGGGHTS is launched and split, not the case."""
+    from orchestrator.engines import default_grid, get_adapter
+
+    monkeypatch.setenv("DEMORCH_LIGGGHTS_MPI", "2")
+    monkeypatch.delenv("DEMORCH_LIGGGHTS_GRID", raising=False)
+    with default_grid("1 * 1"):
+        adapter = get_adapter("liggghts")
+        deck = adapter.write_input(sliding_case("liggghts"), tmp_path, tmp_path)
+    assert "processors      1 * 1" in deck.read_text()
+    command = adapter.command(deck)
+    assert command[command.index("-np") + 1] == "2"
+    monkeypatch.setenv("DEMORCH_LIGGGHTS_GRID", "2 1 1")
+    with default_grid("1 * 1"):  # the user's grid wins over a study's default
+        assert get_adapter("liggghts").processor_grid == "2 1 1"
+
+
+@pytest.mark.parametrize(("variable", "value"), [("DEMORCH_LIGGGHTS_MPI", "two"), ("DEMORCH_LIGGGHTS_MPI", "0"), ("DEMORCH_LIGGGHTS_GRID", "1 *"), ("DEMORCH_LIGGGHTS_GRID", "1 x 1")])
+def test_bad_mpi_settings_name_the_variable(variable: str, value: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    from orchestrator.engines import get_adapter
+
+    monkeypatch.setenv(variable, value)
+    with pytest.raises(CaseError, match=f"{variable}=.*allowed range"):
+        get_adapter("liggghts")

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from ..case import CaseError
 from .base import EngineAdapter, EngineError, EngineInfo
@@ -24,9 +26,36 @@ def liggghts_processes() -> int:
     return int(value)
 
 
+GRID_ENV = "DEMORCH_LIGGGHTS_GRID"
+
+
+def liggghts_grid() -> str:
+    """The MPI processor grid of DEMORCH_LIGGGHTS_GRID ("Px Py Pz", each a count or *; default "* * *",
+    LIGGGHTS' own choice). A split across the flow ("1 * 1") balances a flow symmetric about y = 0."""
+    value = " ".join(os.environ.get(GRID_ENV, "* * *").split())
+    parts = value.split(" ")
+    if len(parts) != 3 or not all(p == "*" or (p.isdigit() and 1 <= int(p) <= 256) for p in parts):
+        raise CaseError(f"{GRID_ENV}={value!r}: must be three processor counts or * (e.g. '1 * 1'); allowed range: 1 to 256 each")
+    return value
+
+
+@contextmanager
+def default_grid(grid: str) -> Iterator[None]:
+    """Within: DEMORCH_LIGGGHTS_GRID is `grid` unless the user set it (a study that knows its
+    symmetry picks the split, the user's word wins)."""
+    if GRID_ENV in os.environ:
+        yield
+        return
+    os.environ[GRID_ENV] = grid
+    try:
+        yield
+    finally:
+        os.environ.pop(GRID_ENV, None)
+
+
 def get_adapter(name: str) -> EngineAdapter:
     if name == "liggghts":
-        return LiggghtsAdapter(mpi_processes=liggghts_processes())
+        return LiggghtsAdapter(mpi_processes=liggghts_processes(), processor_grid=liggghts_grid())
     if name == "yade":
         return YadeAdapter()
     if name == "cocd":
@@ -34,4 +63,4 @@ def get_adapter(name: str) -> EngineAdapter:
     raise ValueError(f"unknown engine {name!r}; allowed: {', '.join(ENGINE_NAMES)}")
 
 
-__all__ = ["ENGINE_NAMES", "MPI_ENV", "liggghts_processes", "EngineAdapter", "EngineError", "EngineInfo", "get_adapter"]
+__all__ = ["ENGINE_NAMES", "GRID_ENV", "default_grid", "MPI_ENV", "liggghts_grid", "liggghts_processes", "EngineAdapter", "EngineError", "EngineInfo", "get_adapter"]

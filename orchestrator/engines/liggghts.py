@@ -186,9 +186,10 @@ class ThermoWatcher:
 class LiggghtsAdapter:
     name = "liggghts"
 
-    def __init__(self, executable: str = "liggghts", mpi_processes: int = 1):
+    def __init__(self, executable: str = "liggghts", mpi_processes: int = 1, processor_grid: str = "* * *"):
         self.executable = executable
         self.mpi_processes = mpi_processes
+        self.processor_grid = processor_grid
 
     def info(self) -> EngineInfo:
         return EngineInfo(
@@ -225,6 +226,7 @@ class LiggghtsAdapter:
         segments = run_segments(case, prepared.schedule)
         context = {
             "name": case.name,
+            "processors": [int(p) if p != "*" else None for p in self.processor_grid.split()],
             "materials": [{"name": name, "type": t} for name, t in types.items()],
             "n_types": len(types),
             "matrix": common.pair_matrices(case, prepared.pairs),
