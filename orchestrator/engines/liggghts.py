@@ -155,7 +155,7 @@ def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) ->
     start = plan.total_steps - last_segment_steps
     first = min(max(0, rest["after"] - start), last_segment_steps)
     chunks, remainder = divmod(last_segment_steps - first, rest["every"])
-    return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "mass": repr(rest["mass"])}
+    return {**rest, "first": first, "chunks": chunks, "remainder": remainder}
 
 
 class ThermoWatcher:

@@ -130,18 +130,19 @@ class YadeAdapter:
             raise EngineError("YADE wrote no frames", script, rundir / "engine.log")
         first = rows[0]
         stack = np.stack(rows)
+        case = common.saved_case(rundir)  # parsed once: materials, inertia and the step all come from it
         return Trajectory(
             time=np.asarray(times),
             ids=first[:, 0].astype(np.int64),
-            material=common.body_materials(common.saved_case(rundir)),
+            material=common.body_materials(case),
             mass=first[:, 1].copy(),
             radius=first[:, 2].copy(),
-            inertia=common.body_inertia(common.saved_case(rundir)),
+            inertia=common.body_inertia(case),
             position=stack[:, :, 3:6],
             velocity=stack[:, :, 6:9],
             angular_velocity=stack[:, :, 9:12],
             orientation=stack[:, :, 12:16],
-            attrs={"orientation_tracked": True, **common.at_rest_attrs(rundir, physics.schedule(common.saved_case(rundir)).dt)},
+            attrs={"orientation_tracked": True, **common.at_rest_attrs(rundir, physics.schedule(case).dt)},
         )
 
 
