@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from .bricks import BrickClump, quaternion_matrix
 from .packing import random_orientations
@@ -122,34 +123,45 @@ def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orienta
     tops = np.zeros((cells, cells))
     for position, orientation in zip(positions, orientations):
         spheres = (position + brick.centres @ quaternion_matrix(orientation).T - corner) @ axes.T
-        for u, v, n in spheres:
+        for (u, v, n), radius in zip(spheres, brick.radii):
             a = int(np.clip(u / geometry.box_depth * cells, 0, cells - 1))
             b = int(np.clip(v / geometry.box_width * cells, 0, cells - 1))
-            tops[a, b] = max(tops[a, b], n + brick.radius)
+            tops[a, b] = max(tops[a, b], n + radius)
     bulk = geometry.box_depth * geometry.box_width * float(tops.mean())
     return len(positions) * brick.mass / bulk
 
 
-def ordered_pile(geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+def ordered_pile(
+    geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.0005, flip_seed: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Bricks in regular rows: length along the slope, width across, thickness normal; layers upward.
 
-    The brick frame (length x, width y, thickness z) is turned onto the box frame (u, v, n).
+    The brick frame (length x, width y, thickness z) is turned onto the box frame (u, v, n). Each
+    brick's nominal box fills its cell (its centre of mass is off the cell centre if bevelled). With
+    `flip_seed`, each brick is also turned half a turn about one of its axes, or not, at random (the
+    paper's random flips: bevelled faces then point every way, so rows no longer stack flat).
     """
-    nu = max(1, int(geometry.box_depth // (brick.length + gap)))
-    nv = max(1, int(geometry.box_width // (brick.width + gap)))
+    cell = brick.extent + gap
+    nu, nv = pile_rows(geometry, brick, gap)
     index = np.arange(count)
     i, j, k = index % nu, (index // nu) % nv, index // (nu * nv)
     local = np.stack(
-        [(i + 0.5) * (brick.length + gap), (j + 0.5) * (brick.width + gap), (k + 0.5) * (brick.thickness + gap) + gap], axis=1
+        [(i + 0.5) * cell[0], (j + 0.5) * cell[1], (k + 0.5) * cell[2] + gap], axis=1
     )
     # Rotation taking the brick axes onto (down-slope, across, normal), a right-handed frame.
     matrix = np.stack([geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal], axis=1)
-    quaternion = _matrix_quaternion(matrix)
-    return geometry.box_to_world(local), np.tile(quaternion, (count, 1))
+    flips = HALF_TURNS[np.random.default_rng(flip_seed).integers(0, 4, count)] if flip_seed is not None else HALF_TURNS[np.zeros(count, dtype=int)]
+    rotations = Rotation.from_matrix(matrix) * Rotation.from_quat(np.roll(flips, -1, axis=1))  # flip in the brick frame first
+    x, y, z, w = rotations.as_quat().T
+    positions = geometry.box_to_world(local) + rotations.apply(brick.centroid_offset)
+    return positions, np.stack([w, x, y, z], axis=1)
 
 
-def _matrix_quaternion(matrix: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
+def pile_rows(geometry: AvalancheGeometry, brick: BrickClump, gap: float) -> tuple[int, int]:
+    """Bricks along the slope and across in one layer of the ordered pile."""
+    cell = brick.extent + gap
+    return max(1, int(geometry.box_depth // cell[0])), max(1, int(geometry.box_width // cell[1]))
 
-    x, y, z, w = Rotation.from_matrix(matrix).as_quat()
-    return np.array([w, x, y, z])
+
+# (w, x, y, z): no turn, and half turns about the brick's x, y, z axes.
+HALF_TURNS = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])

@@ -20,7 +20,7 @@ import yaml
 from pydantic import Field, ValidationError, model_validator
 
 from . import deposit, front
-from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_height, rain_positions
+from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
 from .bricks import BrickClump
 from .case import Case, CaseError, Engine, Name, Real, RestStop, Strict, _format_error, parse_case
 from .engines import EngineError, default_grid
@@ -59,9 +59,10 @@ class BrickSpec(Strict):
     thickness: Real(gt=0.0, le=1.0) = 0.008
     density: Real(gt=0.0, le=1e5) = 1700.0
     layout: tuple[int, int, int] = (4, 2, 1)
+    bevel_deg: Real(ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see bricks.py)
 
     def build(self) -> BrickClump:
-        return BrickClump(self.length, self.width, self.thickness, self.density, self.layout)
+        return BrickClump(self.length, self.width, self.thickness, self.density, self.layout, self.bevel_deg)
 
 
 class PairSpec(Strict):
@@ -91,6 +92,14 @@ class PackingSpec(Strict):
     # studies (a campaign) that vary the contacts of the flow only.
     contacts: ContactSpec | None = None
     brick_brick_mu: Real(ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing
+    # Ordered pile only: turn each brick half a turn about a random axis, or not (the paper's flips).
+    flips: bool = False
+
+    @model_validator(mode="after")
+    def _flips_need_a_pile(self) -> "PackingSpec":
+        if self.flips and self.kind != "ordered_pile":
+            raise ValueError("flips: only for kind ordered_pile (a random pour orients every brick at random already)")
+        return self
 
 
 class ReleaseSpec(Strict):
@@ -168,9 +177,9 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
         positions, orientations = rain_positions(geometry, brick, count, study.seed, gap=0.003)
         return positions, orientations, max(geometry.box_height, rain_height(geometry, brick, count, gap=0.003))
     gap = 0.0025 if study.engine is Engine.liggghts else 0.0005  # LIGGGHTS places within 1 mm
-    positions, orientations = ordered_pile(geometry, brick, count, gap=gap)
-    per_layer = max(1, int(geometry.box_depth // (brick.length + gap)) * int(geometry.box_width // (brick.width + gap)))
-    height = max(geometry.box_height, (count // per_layer + 1) * (brick.thickness + gap) + gap)
+    positions, orientations = ordered_pile(geometry, brick, count, gap=gap, flip_seed=study.seed if study.packing.flips else None)
+    rows, columns = pile_rows(geometry, brick, gap)
+    height = max(geometry.box_height, (count // (rows * columns) + 1) * (brick.extent[2] + gap) + gap)
     return positions, orientations, height
 
 
@@ -190,7 +199,8 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
                 {"name": "box", "density": 1400.0},
             ],
             "contacts": contacts,
-            "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout)}],
+            "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout),
+                        "bevel_deg": spec.bevel_deg}],
             "bodies": {"clumps": clumps},
             "walls": walls,
             **extra,

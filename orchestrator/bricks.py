@@ -1,16 +1,25 @@
-"""Bricks as clumps of spheres: layout, true mass and inertia, and how far the clump is from the box.
+"""Bricks as clumps of spheres: layout, true mass and inertia, and how far the clump is from the brick.
 
-A brick is a box of length × width × thickness along its body axes x, y, z. A clump of n_x × n_y × n_z
-equal spheres fills it: the radius is thickness / (2 n_z), so the spheres touch the two large faces,
-and on every axis the centres are evenly spread from -(d/2 - r) to +(d/2 - r), so the spheres touch
-the end faces too (neighbours overlap where the spacing is below 2 r). The clump
-gets the mass and principal inertia of the true (full) box, never of the union of spheres, so the
+A brick is a box of length × width × thickness along its body axes x, y, z, optionally bevelled: the
+paper's "modified bricks" have three faces (here +x, +y, +z) turned by `bevel_deg` so that stacked
+bricks no longer sit flat on each other. Each bevelled face is turned about its centre line, so the
+brick keeps its volume and mass (to 0.1 %): at 2° the +z and +y faces drop along x (the brick is
+8.54 mm thick and 15.54 mm wide at its −x end, 7.46 and 14.46 mm at its +x end) and the +x face
+along y (31.26 mm long on the −y side, 30.74 mm on the +y side).
+
+A clump of n_x × n_y × n_z spheres fills the solid: along each axis the centres are evenly spread so
+that the first and last spheres touch the two opposite faces, and the thickness sets the radius
+(thickness / (2 n_z) for a box, so the spheres touch both large faces; neighbours overlap where the
+spacing is below 2 r). On a bevelled brick the thickness, hence the radius, shrinks towards the +x
+end. The clump gets the mass and inertia of the true solid, never of the union of spheres, so the
 dynamics of a brick do not depend on the resolution; only its surface does, and `surface_deviation`
-reports by how much.
+reports by how much. Body frame: origin at the solid's centre of mass, axes along the brick's edges.
 """
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -24,21 +33,77 @@ class BrickClump:
     thickness: float
     density: float
     layout: tuple[int, int, int]  # spheres along x (length), y (width), z (thickness)
+    bevel_deg: float = 0.0  # turn of the +x, +y, +z faces (0: a box)
 
     @cached_property
-    def radius(self) -> float:
-        """Sphere radius: the thickness direction sets it (half the thickness over its sphere count)."""
-        return self.thickness / (2.0 * self.layout[2])
+    def vertices(self) -> np.ndarray:
+        """(2, 2, 2, 3) corners of the solid, indexed by side (0: −, 1: +) along x, y, z, about the box centre."""
+        a, b, c, t = self.length, self.width, self.thickness, self._slope
+        corners = np.empty((2, 2, 2, 3))
+        for sx, sy, sz in itertools.product((0, 1), repeat=3):
+            # One face plane n · p = d per axis: the − face is the box's, the + face is bevelled.
+            normals = [(1.0, t if sx else 0.0, 0.0), (t if sy else 0.0, 1.0, 0.0), (t if sz else 0.0, 0.0, 1.0)]
+            offsets = [a / 2 if sx else -a / 2, b / 2 if sy else -b / 2, c / 2 if sz else -c / 2]
+            corners[sx, sy, sz] = np.linalg.solve(np.array(normals), np.array(offsets))
+        return corners
+
+    @property
+    def _slope(self) -> float:
+        return math.tan(math.radians(self.bevel_deg))
+
+    @cached_property
+    def _mass_properties(self) -> tuple[float, np.ndarray, np.ndarray]:
+        """(volume, centroid, covariance ∫ (p − centroid)(p − centroid)ᵀ dV) of the solid, about the box centre."""
+        if self.bevel_deg == 0.0:  # the box, in closed form
+            sides = np.array([self.length, self.width, self.thickness])
+            volume = float(np.prod(sides))
+            return volume, np.zeros(3), np.diag(volume * sides**2 / 12.0)
+        return solid_moments(self.vertices.reshape(-1, 3))
+
+    @cached_property
+    def centroid_offset(self) -> np.ndarray:
+        """Centre of mass of the solid relative to the centre of the full box (zero without bevel)."""
+        return self._mass_properties[1]
+
+    @cached_property
+    def _spheres(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centres about the box centre, radii): each axis spread between its two faces, at the local extent.
+
+        The extents on a bevelled brick depend on where the sphere sits (the +z face drops along x),
+        so the layout is iterated to its fixed point (contracting by tan β per pass; one pass for a
+        box). A sphere touches a bevelled face when its centre is r / cos β inside along the axis.
+        """
+        a, b, c, t = self.length, self.width, self.thickness, self._slope
+        stretch = math.sqrt(1.0 + t * t)  # 1 / cos β
+        lattice = [np.linspace(0.0, 1.0, n) if n > 1 else np.full(1, 0.5) for n in self.layout]
+        fraction = np.stack([g.ravel() for g in np.meshgrid(*lattice, indexing="ij")], axis=1)
+        centres = (fraction - 0.5) * np.array([a, b, c])
+        for _ in range(50):
+            x, y = centres[:, 0], centres[:, 1]
+            low = np.array([-a / 2, -b / 2, -c / 2])
+            high = np.stack([a / 2 - y * t, b / 2 - x * t, c / 2 - x * t], axis=1)
+            radii = (high[:, 2] - low[2]) / (self.layout[2] * (1.0 + stretch))
+            first, last = low + radii[:, None], high - stretch * radii[:, None]
+            updated = first + fraction * (last - first)
+            if np.allclose(updated, centres, rtol=0.0, atol=1e-15):
+                break
+            centres = updated
+        return updated, radii
 
     @cached_property
     def centres(self) -> np.ndarray:
-        """(n, 3) sphere centres in the body frame, centred on the brick's centre."""
-        axes = []
-        for extent, count in zip((self.length, self.width, self.thickness), self.layout):
-            reach = extent / 2.0 - self.radius
-            axes.append(np.linspace(-reach, reach, count) if count > 1 else np.zeros(1))
-        grid = np.meshgrid(*axes, indexing="ij")
-        return np.stack([g.ravel() for g in grid], axis=1)
+        """(n, 3) sphere centres in the body frame (about the centre of mass)."""
+        return self._spheres[0] - self.centroid_offset
+
+    @cached_property
+    def radii(self) -> np.ndarray:
+        """(n,) sphere radii: all equal on a box."""
+        return self._spheres[1]
+
+    @property
+    def radius(self) -> float:
+        """The largest sphere radius (the only one on a box): what neighbour skins are sized by."""
+        return float(self.radii.max())
 
     @property
     def n_spheres(self) -> int:
@@ -46,49 +111,85 @@ class BrickClump:
 
     @property
     def volume(self) -> float:
-        return self.length * self.width * self.thickness
+        return self._mass_properties[0]
 
     @property
     def mass(self) -> float:
         return self.density * self.volume
 
+    @cached_property
+    def inertia_tensor(self) -> np.ndarray:
+        """(3, 3) inertia of the solid about its centre of mass, in the brick axes: ρ (tr(C) 1 − C)."""
+        covariance = self._mass_properties[2]
+        return self.density * (np.trace(covariance) * np.eye(3) - covariance)
+
     @property
     def principal_inertia(self) -> np.ndarray:
-        """(I_x, I_y, I_z) of the full box about its centre: m/12 (b² + c²) etc."""
-        a, b, c = self.length, self.width, self.thickness
-        return self.mass / 12.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
+        """(I_x, I_y, I_z) about the brick axes: m/12 (b² + c²) etc. for a box, where they are principal.
+
+        A 2° bevel adds products of inertia (up to 7 % of I_x) and tilts the principal axes by up to
+        1.9°, but the principal moments differ from these diagonal terms by 0.3 % at most. LIGGGHTS
+        takes the whole tensor; YADE, which takes three moments, gets these.
+        """
+        return np.diag(self.inertia_tensor).copy()
+
+    @cached_property
+    def extent(self) -> np.ndarray:
+        """(3,) size of the smallest centred box holding the solid in any half-turned orientation.
+
+        A bevelled face juts out of the nominal box on one side (0.54 mm at 2°); flipped bricks
+        stacked in rows need that much room on both sides.
+        """
+        return 2.0 * np.abs(self.vertices.reshape(-1, 3)).max(axis=0)
 
     @property
     def bounding_radius(self) -> float:
-        return float(np.max(np.linalg.norm(self.centres, axis=1)) + self.radius)
+        return float(np.max(np.linalg.norm(self.centres, axis=1) + self.radii))
 
     def surface_deviation(self, samples_per_edge: int = 40) -> tuple[float, float]:
-        """(max, mean) distance from points on the box surface to the surface of the sphere union.
+        """(max, mean) distance from points on the brick's surface to the surface of the sphere union.
 
         Points are a regular grid on all six faces; the distance is |signed distance to the union|,
-        the union's signed distance being min_i(|p - c_i| - r).
+        the union's signed distance being min_i(|p - c_i| - r_i).
         """
-        points = box_surface_points(self.length, self.width, self.thickness, samples_per_edge)
-        gaps = np.linalg.norm(points[:, None, :] - self.centres[None, :, :], axis=2) - self.radius
+        points = solid_surface_points(self.vertices, samples_per_edge) - self.centroid_offset
+        gaps = np.linalg.norm(points[:, None, :] - self.centres[None, :, :], axis=2) - self.radii[None, :]
         distance = np.abs(gaps.min(axis=1))
         return float(distance.max()), float(distance.mean())
 
 
-def box_surface_points(length: float, width: float, thickness: float, n: int) -> np.ndarray:
-    """A regular grid of n × n points on each of the six faces of a centred box."""
-    half = np.array([length, width, thickness]) / 2.0
-    grid = np.linspace(-1.0, 1.0, n)
-    u, v = np.meshgrid(grid, grid, indexing="ij")
-    u, v = u.ravel(), v.ravel()
+def solid_moments(points: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """(volume, centroid, covariance about the centroid) of the convex hull of `points`.
+
+    The hull is cut into tetrahedra (apex at the mean point, base a hull triangle); a tetrahedron
+    with vertices v_0..v_3 and volume V has ∫ p pᵀ dV = V / 20 (Σ v_i v_iᵀ + s sᵀ), s = Σ v_i.
+    """
+    from scipy.spatial import ConvexHull
+
+    points = np.asarray(points, dtype=float)
+    apex = points.mean(axis=0)
+    triangles = points[ConvexHull(points).simplices]  # (m, 3, 3)
+    tetrahedra = np.concatenate([np.broadcast_to(apex, (len(triangles), 1, 3)), triangles], axis=1)  # (m, 4, 3)
+    volumes = np.abs(np.linalg.det(triangles - apex)) / 6.0
+    total = float(volumes.sum())
+    centroid = np.einsum("m,mj->j", volumes, tetrahedra.mean(axis=1)) / total
+    sums = tetrahedra.sum(axis=1)
+    second = np.einsum("m,mij->ij", volumes / 20.0, np.einsum("mki,mkj->mij", tetrahedra, tetrahedra) + np.einsum("mi,mj->mij", sums, sums))
+    return total, centroid, second - total * np.outer(centroid, centroid)
+
+
+def solid_surface_points(vertices: np.ndarray, n: int) -> np.ndarray:
+    """A regular n × n grid of points on each of the six (planar, four-cornered) faces of a hexahedron.
+
+    vertices: (2, 2, 2, 3) corners indexed by side along x, y, z (see BrickClump.vertices).
+    """
+    grid = np.linspace(0.0, 1.0, n)
+    u, v = (g.ravel()[:, None] for g in np.meshgrid(grid, grid, indexing="ij"))
     faces = []
     for axis in range(3):
-        others = [k for k in range(3) if k != axis]
-        for sign in (-1.0, 1.0):
-            face = np.empty((u.size, 3))
-            face[:, axis] = sign * half[axis]
-            face[:, others[0]] = u * half[others[0]]
-            face[:, others[1]] = v * half[others[1]]
-            faces.append(face)
+        for side in (0, 1):
+            corner = np.take(vertices, side, axis=axis)  # (2, 2, 3) over the two other axes
+            faces.append((1 - u) * (1 - v) * corner[0, 0] + u * (1 - v) * corner[1, 0] + (1 - u) * v * corner[0, 1] + u * v * corner[1, 1])
     return np.concatenate(faces)
 
 
@@ -102,6 +203,13 @@ def quaternion_matrix(q: np.ndarray | tuple[float, float, float, float]) -> np.n
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
         ]
     )
+
+
+def quaternion_matrices(quaternions: np.ndarray) -> np.ndarray:
+    """(B, 3, 3) rotation matrices of (B, 4) quaternions (w, x, y, z)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_quat(np.roll(np.asarray(quaternions, dtype=float), -1, axis=1)).as_matrix()
 
 
 def world_sphere_centres(clump: BrickClump, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:

@@ -138,16 +138,20 @@ class Sphere(Strict):
 
 
 class BrickShape(Strict):
-    """A brick (box) made of a clump of layout[0] × layout[1] × layout[2] spheres (see bricks.py)."""
+    """A brick (box) made of a clump of layout[0] × layout[1] × layout[2] spheres (see bricks.py).
+
+    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; bricks.py says which).
+    """
 
     name: Name
     length: Real(gt=0.0, le=10.0)
     width: Real(gt=0.0, le=10.0)
     thickness: Real(gt=0.0, le=10.0)
     layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
+    bevel_deg: Real(ge=0.0, le=10.0) = 0.0
 
     def clump(self, density: float) -> BrickClump:
-        return BrickClump(self.length, self.width, self.thickness, density, self.layout)
+        return BrickClump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg)
 
 
 class Clump(Strict):

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import click
+import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
@@ -363,6 +364,32 @@ def doctor() -> None:
     console.print(table)
     if not healthy:
         sys.exit(1)
+
+
+@main.command()
+@click.option("--layout", "layouts", type=(int, int, int), multiple=True, help="Spheres along length, width, thickness (repeatable). Default: 4 2 1, 8 2 1, 6 3 2, 12 6 2.")
+@click.option("--bevel", "bevel_deg", type=click.FloatRange(0.0, 10.0), default=0.0, show_default=True, help="Turn of three faces, degrees (2 for the paper's modified bricks).")
+@click.option("--size", type=(float, float, float), default=(0.031, 0.015, 0.008), show_default=True, help="Length, width, thickness (m).")
+@click.option("--density", type=click.FloatRange(min=0.0, min_open=True), default=1700.0, show_default=True, help="kg/m³.")
+def brick(layouts: tuple[tuple[int, int, int], ...], bevel_deg: float, size: tuple[float, float, float], density: float) -> None:
+    """How well each clump resolution fits the brick: spheres, radii, surface gap, mass, inertia."""
+    from .bricks import BrickClump
+
+    if min(size) <= 0.0:
+        _fail(f"--size: every dimension must be > 0 m (got {size})")
+    for layout in layouts:
+        if not all(1 <= n <= 64 for n in layout):
+            _fail(f"--layout: each count must be in [1, 64] (got {layout})")
+    table = Table(title=f"brick {size[0] * 1e3:g} × {size[1] * 1e3:g} × {size[2] * 1e3:g} mm, bevel {bevel_deg:g}°", header_style="bold")
+    for column in ("layout", "spheres", "radius (mm)", "max / mean gap to the brick (mm)", "mass (g)", "I_x, I_y, I_z (kg m²)"):
+        table.add_column(column)
+    for layout in layouts or ((4, 2, 1), (8, 2, 1), (6, 3, 2), (12, 6, 2)):
+        clump = BrickClump(*size, density, layout, bevel_deg)
+        worst, mean = clump.surface_deviation()
+        radii = f"{clump.radii.min() * 1e3:.2f}–{clump.radius * 1e3:.2f}" if np.ptp(clump.radii) > 1e-9 else f"{clump.radius * 1e3:.2f}"
+        table.add_row(" × ".join(map(str, layout)), str(clump.n_spheres), radii, f"{worst * 1e3:.2f} / {mean * 1e3:.2f}",
+                      f"{clump.mass * 1e3:.3f}", ", ".join(f"{i:.3g}" for i in clump.principal_inertia))
+    console.print(table)
 
 
 @main.command("build-contact")

@@ -60,6 +60,39 @@ def test_ordered_pile_lays_bricks_along_the_slope_at_near_full_density() -> None
     assert apparent_density(geometry, positions, orientations, BRICK) == pytest.approx(expected, rel=0.05)
 
 
+def test_flipped_bevelled_pile_turns_bricks_at_random_and_keeps_each_inside_its_cell() -> None:
+    """Random flips: each brick half-turned about one of its axes or not, with a seed; no two overlap."""
+    from orchestrator.avalanche import HALF_TURNS, pile_rows
+
+    geometry, bevelled, gap = AvalancheGeometry(), BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1), bevel_deg=2.0), 0.0005
+    count = 400
+    positions, orientations = ordered_pile(geometry, bevelled, count, gap=gap, flip_seed=11)
+    again, _ = ordered_pile(geometry, bevelled, count, gap=gap, flip_seed=11)
+    np.testing.assert_array_equal(positions, again)  # reproducible from the seed
+    _, unflipped = ordered_pile(geometry, bevelled, 1, gap=gap)
+    base = quaternion_matrix(unflipped[0])
+    turns = [int(np.argmin([np.abs(quaternion_matrix(q) - base @ quaternion_matrix(h)).max() for h in HALF_TURNS])) for q in orientations]
+    for q, turn in zip(orientations, turns):
+        np.testing.assert_allclose(quaternion_matrix(q), base @ quaternion_matrix(HALF_TURNS[turn]), atol=1e-12)
+    assert all(0.15 < turns.count(t) / count < 0.35 for t in range(4))  # the four turns, about equally often
+    # Every corner of every brick lies in that brick's cell of the pile: bevels jutting out of the
+    # nominal box on either side still leave the neighbours apart.
+    rows, columns = pile_rows(geometry, bevelled, gap)
+    cell = bevelled.extent + gap
+    axes = np.stack([-geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal])
+    index = np.arange(count)
+    cells = np.stack([index % rows, (index // rows) % columns, index // (rows * columns)], axis=1)
+    for k in range(count):
+        corners = positions[k] + (bevelled.vertices.reshape(-1, 3) - bevelled.centroid_offset) @ quaternion_matrix(orientations[k]).T
+        local = (corners - geometry.box_corner()) @ axes.T - np.array([0.0, 0.0, gap])
+        assert np.all(local >= cells[k] * cell - 1e-12) and np.all(local <= (cells[k] + 1) * cell + 1e-12)
+
+
+def test_flips_are_refused_for_a_random_pour() -> None:
+    with pytest.raises(Exception, match=r"packing.flips|flips: only for kind ordered_pile"):
+        AvalancheStudy.model_validate({"name": "x", "packing": {"kind": "random_pour", "flips": True}})
+
+
 def tiny_study(engine: str) -> AvalancheStudy:
     """≈30 bricks in a 12 × 10 cm box launched from 25 cm: a real avalanche in well under a minute.
 
@@ -123,6 +156,8 @@ def test_preset_studies_load_with_the_paper_brick_counts() -> None:
     presets = {p.stem: load_study(p) for p in sorted((Path(__file__).parent.parent / "cases" / "avalanche").glob("*.yaml"))}
     assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
     assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
+    assert presets["ordered_pile_bevelled_full"].brick_count == pytest.approx(10000, rel=0.02)
+    assert presets["ordered_pile_bevelled_full"].brick.build().bevel_deg == 2.0 and presets["ordered_pile_bevelled_full"].packing.flips
     assert presets["small"].brick_count == pytest.approx(95, rel=0.02)
 
 

@@ -65,3 +65,13 @@ def test_every_documented_command_exists(command: list[str]) -> None:
     result = CliRunner().invoke(main, [*command, "--help"])
     assert result.exit_code == 0, result.output
     assert "Usage:" in result.output
+
+
+def test_brick_command_reports_each_resolution_and_refuses_a_bad_layout() -> None:
+    """`demorch brick`: the fit of each clump resolution to the brick, before users pick one."""
+    result = CliRunner().invoke(main, ["brick", "--bevel", "2", "--layout", "4", "2", "1", "--layout", "12", "6", "2"])
+    assert result.exit_code == 0, result.output
+    assert "3.24 / 1.12" in result.output and "1.64 / 0.41" in result.output  # max / mean gap (mm), bevelled
+    assert "3.79–4.20" in result.output  # radii shrink towards the thin end
+    refused = CliRunner().invoke(main, ["brick", "--layout", "0", "2", "1"])
+    assert refused.exit_code == 2 and "--layout" in refused.output and "[1, 64]" in refused.output

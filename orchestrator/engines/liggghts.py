@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import geometry, physics
+from ..bricks import quaternion_matrices
 from ..case import Case, CaseError
 from ..results import Trajectory
 from . import common
@@ -89,8 +90,8 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
     templates = {}
     for index, (shape_name, material) in enumerate(kinds):
         brick = case.shape(shape_name).clump(case.material(material).density)
-        spheres = " ".join(f"{_numbers(c)} {brick.radius!r}" for c in brick.centres)
-        ixx, iyy, izz = (float(v) for v in brick.principal_inertia)
+        spheres = " ".join(f"{_numbers(c)} {float(r)!r}" for c, r in zip(brick.centres, brick.radii))
+        tensor = brick.inertia_tensor
         templates[(shape_name, material)] = {
             "template": f"template_{index + 1}",
             "distribution": f"distribution_{index + 1}",
@@ -102,7 +103,7 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
             "spheres": spheres,
             "multisphere_type": index + 1,
             "mass": brick.mass,
-            "inertia": f"{ixx!r} 0.0 0.0 {iyy!r} 0.0 {izz!r}",
+            "inertia": _numbers(tensor[i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))),
         }
     clumps = [
         {
@@ -373,16 +374,17 @@ def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarr
 def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once.
 
-    Centre: mean of the sphere centres (the layouts are symmetric about the brick centre). Velocity:
-    mean sphere velocity. Spin: the spheres carry their body's. Orientation: the rotation that best
-    maps the template's sphere centres onto the dumped ones (Kabsch, by a batched SVD), as a
-    (w, x, y, z) quaternion of the brick frame. Bodies are matched to the case's clumps by their
+    Orientation: the rotation R that best maps the template's sphere centres onto the dumped ones
+    (Kabsch, by a batched SVD), as a (w, x, y, z) quaternion of the brick frame. Centre: the brick's
+    centre of mass, mean of the sphere centres − R × the template's mean (zero on a box; not on a
+    bevelled brick). Velocity: mean sphere velocity. Spin: the spheres carry their body's. Bodies are matched to the case's clumps by their
     nearest requested position in the first frame (insertion places them within 1 mm).
     """
     from scipy.spatial import cKDTree
 
     clumps = case.bodies.clumps
     templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
+    template_means = np.array([t.mean(axis=0) for t in templates])
     shape = (len(frames), len(clumps))
     position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))
     orientation = np.full(shape + (4,), np.nan)
@@ -418,8 +420,11 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
             velocity[f, slots] = group[:, :, vxyz].mean(axis=1)
             spin[f, slots] = group[:, 0, wxyz]
             if int(size) not in stacked:
-                stacked[int(size)] = np.stack([c if len(c) == size else np.full((size, 3), np.nan) for c in templates])
-            orientation[f, slots] = kabsch_quaternions(group[:, :, xyz] - centre[:, None, :], stacked[int(size)][slots])
+                stacked[int(size)] = np.stack([c - c.mean(axis=0) if len(c) == size else np.full((size, 3), np.nan) for c in templates])
+            quaternions = kabsch_quaternions(group[:, :, xyz] - centre[:, None, :], stacked[int(size)][slots])
+            orientation[f, slots] = quaternions
+            if np.any(template_means[slots]):
+                position[f, slots] = centre - np.einsum("bij,bj->bi", quaternion_matrices(quaternions), template_means[slots])
     return position, velocity, spin, orientation
 
 

@@ -86,7 +86,7 @@ class YadeAdapter:
             brick = case.shape(c.shape).clump(case.material(c.material).density)
             centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
             clumps.append(
-                (c.material, [tuple(float(v) for v in p) for p in centres], brick.radius, c.position, c.orientation,
+                (c.material, [tuple(float(v) for v in p) for p in centres], [float(r) for r in brick.radii], c.position, c.orientation,
                  c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia))
             )
         touching = case.touching_pairs()
