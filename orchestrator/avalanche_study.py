@@ -331,6 +331,7 @@ def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0) -> 
             "max_velocity": float(np.nanmax(velocity)),
             "max_velocity_on_flat": float(np.nanmax(velocity[on_flat])) if on_flat.any() else float("nan"),
             "final_position": float(position[-1]),
+            "flat_phases": front.flat_phases(position, velocity),
         },
         "kinetic_to_released_energy": released_ratio(trajectory, first_frame),
     }

@@ -44,3 +44,45 @@ def front_curve(
     step = float(np.median(np.diff(time)))
     velocity = savgol_filter(position, length, polyorder=2, deriv=1, delta=step, mode="interp")
     return position, velocity
+
+
+def flat_phases(position: np.ndarray, velocity: np.ndarray, min_points: int = 3) -> dict[str, float | bool] | None:
+    """The front's phases on the flat board, as the 2012 study reads its Figs 12c/14c: v against x.
+
+    From the first frame with the front on the flat (x ≥ 0) to the frame where it first reaches its
+    farthest x, v(x) is fitted with three straight segments (the pair of break points with the least
+    squared error, each segment at least `min_points` frames). Returned: the break points x_1, x_2,
+    the slopes dv/dx of the three segments (negative: deceleration), the farthest x, and whether the
+    pattern is strong / slow / strong (the middle slope smaller in magnitude than both others). None
+    when the front spends fewer than 3 × min_points frames on the flat.
+    """
+    finite = np.isfinite(position) & np.isfinite(velocity)
+    on_flat = np.flatnonzero(finite & (position >= 0.0))
+    if on_flat.size == 0:
+        return None
+    first = int(on_flat[0])
+    last = first + int(np.nanargmax(np.where(finite[first:], position[first:], -np.inf)))
+    x, v = position[first : last + 1], velocity[first : last + 1]
+    keep = np.isfinite(x) & np.isfinite(v)
+    x, v = x[keep], v[keep]
+    if len(x) < 3 * min_points:
+        return None
+
+    def line(i: int, j: int) -> tuple[float, float]:
+        """Slope of the least-squares line through points i..j-1 and its squared error."""
+        slope, intercept = np.polyfit(x[i:j], v[i:j], 1) if np.ptp(x[i:j]) > 0 else (0.0, float(np.mean(v[i:j])))
+        return float(slope), float(np.sum((slope * x[i:j] + intercept - v[i:j]) ** 2))
+
+    best = None
+    n = len(x)
+    for a in range(min_points, n - 2 * min_points + 1):
+        for b in range(a + min_points, n - min_points + 1):
+            (s1, e1), (s2, e2), (s3, e3) = line(0, a), line(a, b), line(b, n)
+            if best is None or e1 + e2 + e3 < best[0]:
+                best = (e1 + e2 + e3, a, b, s1, s2, s3)
+    _, a, b, s1, s2, s3 = best  # type: ignore[misc]
+    return {
+        "x_1": float((x[a - 1] + x[a]) / 2), "x_2": float((x[b - 1] + x[b]) / 2), "x_stop": float(x[-1]),
+        "slope_1": s1, "slope_2": s2, "slope_3": s3,
+        "strong_slow_strong": bool(abs(s2) < abs(s1) and abs(s2) < abs(s3)),
+    }

@@ -18,9 +18,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import meshio  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .front import flat_phases  # noqa: E402
 from .results import Trajectory  # noqa: E402
 
+# The 2012 study's front phases on the flat (reference.toml, random_pour_findings), for the plot.
 FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))
+
+
+def phases_of(report: dict[str, Any]) -> dict[str, Any] | None:
+    """The front's phases on the flat: stored in the report, or fitted now (reports written before they were)."""
+    front = report["front"]
+    if "flat_phases" in front:
+        return front["flat_phases"]
+    return flat_phases(np.asarray(front["position"], dtype=float), np.asarray(front["velocity"], dtype=float))
 
 
 def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[tuple[str, float, str, str]]:
@@ -39,6 +49,17 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
         ("front max speed (m/s)", report["front"]["max_velocity"], "", ""),
         ("front final position (m)", report["front"]["final_position"], "", ""),
     ]
+    phases = phases_of(report)
+    if phases is not None:
+        bands = findings.get("front_phases_on_flat_m", [[0.0, 0.2], [0.2, 0.6], [0.6, 0.8]])
+        pattern = "strong / slow / strong" if phases["strong_slow_strong"] else "not strong / slow / strong"
+        rows += [
+            ("front on flat: 1st switch x_1 (m)", phases["x_1"], f"≈ {bands[0][1]:g} (experiment, full scale)", ""),
+            ("front on flat: 2nd switch x_2 (m)", phases["x_2"], f"≈ {bands[1][1]:g} (experiment, full scale)", ""),
+            ("front on flat: stop (m)", phases["x_stop"], f"≈ {bands[2][1]:g} (experiment, full scale)", ""),
+            ("front on flat: middle/first deceleration", phases["slope_2"] / phases["slope_1"] if phases["slope_1"] else float("nan"),
+             "strong / slow / strong", "pass" if phases["strong_slow_strong"] else pattern),
+        ]
     packing = report.get("packing")
     if packing:
         target = packing["target_apparent_density"]
@@ -80,10 +101,16 @@ def plot_front(report: dict[str, Any], path: Path) -> None:
     left.set_ylabel("front x (m)")
     left.set_title("Mass front position")
     flat = position >= 0.0
-    right.plot(position[flat], velocity[flat], color="tab:red", marker=".")
+    right.plot(position[flat], velocity[flat], color="tab:red", marker=".", label="simulated front")
     for start, end, label in FLAT_PHASES:
         right.axvspan(start, end, alpha=0.08, color="grey")
         right.text((start + end) / 2, 0.02, label, ha="center", va="bottom", fontsize=7, rotation=90, transform=right.get_xaxis_transform())
+    phases = phases_of(report)
+    if phases is not None:
+        for key in ("x_1", "x_2"):
+            right.axvline(phases[key], color="tab:red", lw=1, ls=":")
+        right.plot([], [], color="tab:red", lw=1, ls=":", label=f"fitted switches: {phases['x_1']:.2f}, {phases['x_2']:.2f} m")
+        right.legend(loc="upper right", fontsize=8)
     right.set_xlabel("front position on the flat board (m)")
     right.set_ylabel("front velocity (m/s)")
     right.set_title("Front velocity on the flat (cf. the 2012 study, Figs 12c/14c)")
