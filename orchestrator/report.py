@@ -73,11 +73,11 @@ def plot_deposit(trajectory: Trajectory, path: Path, slope_deg: float = 45.0) ->
     """Plan view (x, y) and longitudinal section (x, z) of the final state, coloured by height."""
     final = trajectory.position[-1]
     ok = np.isfinite(final).all(axis=1)
-    fig, (plan, section) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
+    fig, (plan, section) = plt.subplots(2, 1, figsize=(8, 8), constrained_layout=True)
     scatter = plan.scatter(final[ok, 0], final[ok, 1], c=final[ok, 2], s=6, cmap="viridis")
     plan.axvline(0.0, color="k", lw=0.8, ls="--", label="slope toe")
     plan.set_ylabel("y (m)")
-    plan.set_aspect("equal", adjustable="datalim")
+    plan.set_aspect("equal", adjustable="datalim")  # x is not shared with the section: a shared x clipped wide deposits in y
     plan.set_title("Deposit, plan view (colour: height)")
     fig.colorbar(scatter, ax=plan, label="z (m)")
     section.scatter(final[ok, 0], final[ok, 2], s=4, color="tab:brown")
