@@ -10,7 +10,9 @@ Two sweeps. `sizes`: the cost per step against the brick count (4 × 2 × 1 clum
 process). `variants`: at one size, every brick resolution × contact law × process count (MPI:
 LIGGGHTS only, the box split across the flow as the studies do), so the cost of a finer brick, of
 the other law or of a second core is read off one table. Give the machine to the benchmark: a
-process sharing its core with another slows MPI ranks several-fold.
+process sharing its core with another slows MPI ranks several-fold. Run the variants with
+BENCH_SIM_TIME=0.05 or more: at the default 0.01 s the start-up noise (clump insertion, MPI
+start) swamps the difference of the two runs (a first try measured a negative cost for 6 × 3 × 2).
 
 Method. For each engine and size, the packing stage of a random pour in the full-scale release box
 (on 1.5 m boards: see study_of)
