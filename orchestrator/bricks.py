@@ -21,7 +21,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -156,6 +156,13 @@ class BrickClump:
         gaps = np.linalg.norm(points[:, None, :] - self.centres[None, :, :], axis=2) - self.radii[None, :]
         distance = np.abs(gaps.min(axis=1))
         return float(distance.max()), float(distance.mean())
+
+
+@lru_cache(maxsize=256)
+def brick_clump(length: float, width: float, thickness: float, density: float, layout: tuple[int, int, int], bevel_deg: float = 0.0) -> BrickClump:
+    """One shared BrickClump per set of inputs: cases ask for a shape's clump once per body (10 000
+    times for an ordered pile), and its layout, hull and moments are then worked out once."""
+    return BrickClump(length, width, thickness, density, tuple(layout), bevel_deg)  # type: ignore[arg-type]
 
 
 def solid_moments(points: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ from typing import Annotated, Literal, Union, get_args, get_origin
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .bricks import BrickClump
+from .bricks import BrickClump, brick_clump
 
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
 # inert there and makes quotes, spaces and newlines a validation error rather than an injection.
@@ -151,7 +151,7 @@ class BrickShape(Strict):
     bevel_deg: Real(ge=0.0, le=10.0) = 0.0
 
     def clump(self, density: float) -> BrickClump:
-        return BrickClump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg)
+        return brick_clump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg)
 
 
 class Clump(Strict):

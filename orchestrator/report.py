@@ -52,13 +52,12 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
     phases = phases_of(report)
     if phases is not None:
         bands = findings.get("front_phases_on_flat_m", [[0.0, 0.2], [0.2, 0.6], [0.6, 0.8]])
-        pattern = "strong / slow / strong" if phases["strong_slow_strong"] else "not strong / slow / strong"
         rows += [
             ("front on flat: 1st switch x_1 (m)", phases["x_1"], f"≈ {bands[0][1]:g} (experiment, full scale)", ""),
             ("front on flat: 2nd switch x_2 (m)", phases["x_2"], f"≈ {bands[1][1]:g} (experiment, full scale)", ""),
             ("front on flat: stop (m)", phases["x_stop"], f"≈ {bands[2][1]:g} (experiment, full scale)", ""),
             ("front on flat: middle/first deceleration", phases["slope_2"] / phases["slope_1"] if phases["slope_1"] else float("nan"),
-             "strong / slow / strong", "pass" if phases["strong_slow_strong"] else pattern),
+             "strong / slow / strong", "pass" if phases["strong_slow_strong"] else "not strong / slow / strong"),
         ]
     packing = report.get("packing")
     if packing:
