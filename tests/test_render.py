@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import jinja2
+import numpy as np
 import pytest
 
 from orchestrator.case import CaseError, parse_case
@@ -141,3 +142,30 @@ def test_bad_mpi_settings_name_the_variable(variable: str, value: str, monkeypat
     monkeypatch.setenv(variable, value)
     with pytest.raises(CaseError, match=f"{variable}=.*allowed range"):
         get_adapter("liggghts")
+
+
+def test_large_boxes_get_whole_cutoff_bins_and_the_same_motion(tmp_path: Path) -> None:
+    """A box of metres around millimetre spheres gets larger neighbour bins; the physics is unchanged.
+
+    LIGGGHTS bins the whole box at half the cut-off by default: the full-scale boards made that
+    1.1 GB per process and 0.2 s per neighbour rebuild. The bins only sort spheres before the
+    distance test, so the slide must come out identical (to round-off) with either binning.
+    """
+    from orchestrator.case import Domain
+    from orchestrator.engines.liggghts import MAX_BINS
+    from orchestrator.results import read_results
+    from orchestrator.runner import RESULTS, run_case
+
+    small = sliding_case("liggghts", duration=0.1)
+    large = small.model_copy(update={"domain": Domain(lower=(-3.0, -2.5, -0.6), upper=(3.0, 2.5, 2.9))})
+    small_deck = render_case(small, tmp_path, tmp_path / "small").read_text()
+    large_deck = render_case(large, tmp_path, tmp_path / "large").read_text()
+    binsize = (6.0 * 5.0 * 3.5 / MAX_BINS) ** (1.0 / 3.0)  # 1.7 cm: at most MAX_BINS bins
+    assert "binsize" not in small_deck
+    assert f"neigh_modify    delay 0 binsize {binsize!r}" in large_deck
+    slides = []
+    for case, name in ((small, "small"), (large, "large")):
+        run_case(case, tmp_path, tmp_path / name)
+        slides.append(read_results(tmp_path / name / RESULTS))
+    assert np.abs(slides[0].position[-1] - slides[0].position[0]).max() > 1e-3  # it did slide
+    np.testing.assert_allclose(slides[1].position, slides[0].position, rtol=0.0, atol=1e-12)

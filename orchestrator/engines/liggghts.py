@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import geometry, physics
 from ..bricks import quaternion_matrices
-from ..case import Case, CaseError
+from ..case import Case, CaseError, Domain
 from ..results import Trajectory
 from . import common
 from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -52,6 +52,14 @@ def id_ranges(ids: list[int]) -> str:
     return " ".join(parts)
 
 
+# LIGGGHTS bins the whole box at half the neighbour cut-off and clears every bin at each rebuild.
+# On the full-scale boards (a 6 x 5 x 3.5 m box for 4 mm spheres) that was 2.4e8 bins: 1.1 GB per
+# process and 0.20 s per rebuild, 16 % of the release. Larger bins cap the count at this many
+# (measured on that release: 0.035 s per rebuild at 18.6 mm bins, pair time unchanged within noise).
+MAX_BINS = 2e7
+# Neighbour skin in largest radii. Chosen by measurement (benchmarks/engine_throughput.py, `settings`
+# sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
+SKIN_RADII = 1.0
 PLACEMENT_RADIUS = 1e-3  # m: insert/pack needs a region of some volume (1e-4 m fails); see README
 
 
@@ -70,6 +78,19 @@ def _sphere_radii(case: Case) -> list[float]:
     radii = [s.radius for s in case.bodies.spheres]
     radii += [case.shape(c.shape).clump(case.material(c.material).density).radius for c in case.bodies.clumps]
     return radii
+
+
+def bin_size(domain: Domain, cutoff: float) -> float | None:
+    """The neighbour bin size to ask LIGGGHTS for, or None for its own (half the cut-off).
+
+    A large, mostly empty box (boards of metres, spheres of millimetres) gets bins just large enough
+    to stay within MAX_BINS: memory and the clearing at each rebuild fall with the bin count, while
+    the distance checks per sphere grow with the bin volume (a dense pile pays for bins much larger
+    than the cut-off).
+    """
+    volume = float(np.prod(np.asarray(domain.upper) - np.asarray(domain.lower)))
+    capped = (volume / MAX_BINS) ** (1.0 / 3.0)
+    return capped if capped > 0.5 * cutoff else None
 
 
 def _spheres_per_clump(case: Case) -> str:
@@ -225,6 +246,8 @@ class LiggghtsAdapter:
         fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
         glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
         segments = run_segments(case, prepared.schedule)
+        radius_max = float(max(_sphere_radii(case)))
+        skin = SKIN_RADII * radius_max
         context = {
             "name": case.name,
             "processors": [int(p) if p != "*" else None for p in self.processor_grid.split()],
@@ -235,7 +258,8 @@ class LiggghtsAdapter:
             "data_file": DATA_NAME,
             "dump_file": DUMP_NAME,
             "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
-            "skin": float(max(_sphere_radii(case))),
+            "skin": skin,
+            "binsize": bin_size(prepared.domain, cutoff=2.0 * radius_max + skin),
             "dt": prepared.schedule.dt,
             "gravity_magnitude": magnitude,
             "gravity_direction": [float(v) for v in direction],
