@@ -47,6 +47,7 @@ from orchestrator.results import read_results  # noqa: E402
 from orchestrator.reuse import ensure_run  # noqa: E402
 from orchestrator.runner import RESULTS, run_case  # noqa: E402
 
+liggghts.MAX_BINS = 2e7  # measured with the bin cap (off by default in the decks)
 FULL_SCALE = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
 HORIZONTAL = REPO / "cases" / "collapse" / "horizontal.yaml"
 LIGGGHTS_LOOP = re.compile(r"^Loop time of (\S+) on \d+ procs for (\d+) steps", re.MULTILINE)
