@@ -60,7 +60,7 @@ def id_ranges(ids: list[int]) -> str:
 # (apparent density 801 / 825 / 801 against 898 / 934 / 882 kg/m3 uncapped), which is not explained
 # yet. Benchmarks set it to 2e7 to measure its effect.
 MAX_BINS = float("inf")
-# Neighbour skin in largest radii. Chosen by measurement (benchmarks/engine_throughput.py, `settings`
+# Neighbour skin in largest radii. Chosen by measurement (benchmarks/flow_throughput.py, `settings`
 # sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
 SKIN_RADII = 1.0
 PLACEMENT_RADIUS = 1e-3  # m: insert/pack needs a region of some volume (1e-4 m fails); see README
