@@ -171,7 +171,6 @@ def collapse(engines: list[str], processes: list[int], window: float, scratch: P
 
 
 def main() -> None:
-    liggghts.MAX_BINS = 2e7  # measured with the bin cap (off by default in the decks: see its comment)
     sweeps = os.environ.get("BENCH_SWEEPS", "variants,settings,collapse").split(",")
     engines = os.environ.get("BENCH_ENGINES", "liggghts,yade").split(",")
     bricks = int(os.environ.get("BENCH_BRICKS", 190))

@@ -144,7 +144,7 @@ def test_bad_mpi_settings_name_the_variable(variable: str, value: str, monkeypat
         get_adapter("liggghts")
 
 
-def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None:
     """A box of metres around millimetre spheres gets larger neighbour bins; the physics is unchanged.
 
     LIGGGHTS bins the whole box at half the cut-off by default: the full-scale boards made that
@@ -154,7 +154,6 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path, monkeyp
     from orchestrator.case import Domain
     from orchestrator.engines import liggghts
 
-    monkeypatch.setattr(liggghts, "MAX_BINS", 2e7)  # off by default (see its comment)
     MAX_BINS = liggghts.MAX_BINS
     from orchestrator.results import read_results
     from orchestrator.runner import RESULTS, run_case

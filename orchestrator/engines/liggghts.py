@@ -56,10 +56,12 @@ def id_ranges(ids: list[int]) -> str:
 # On the full-scale boards (a 6 x 5 x 3.5 m box for 4 mm spheres) that was 2.4e8 bins: 1.1 GB per
 # process and 0.20 s per rebuild, 16 % of the release. Larger bins cap the count at this many
 # (measured on that release: 0.035 s per rebuild at 18.6 mm bins, pair time unchanged within noise).
-# OFF by default (inf): with the cap at 2e7 the demo's packing came out 10 % looser on three seeds
-# (apparent density 801 / 825 / 801 against 898 / 934 / 882 kg/m3 uncapped), which is not explained
-# yet. Benchmarks set it to 2e7 to measure its effect.
-MAX_BINS = float("inf")
+# The demo runs 2.7 x faster with it (1 min 13 s against 3 min 19 s). Bins never change a force:
+# pours with capped and own bins agree to round-off until chaos amplifies it (test_avalanche.py,
+# test_capped_bins_leave_a_brick_pour_unchanged_to_round_off). The demo's packing density, taken
+# before the pile is at rest, scatters by 100 kg/m3 between such round-off twins either way
+# (docs/benchmarks.md, "The neighbour bins").
+MAX_BINS = 2e7
 # Neighbour skin in largest radii. Chosen by measurement (benchmarks/flow_throughput.py, `settings`
 # sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
 SKIN_RADII = 1.0
