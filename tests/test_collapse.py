@@ -165,6 +165,20 @@ def test_bad_studies_name_the_field(change: dict, field: str) -> None:
         parse_collapse({**TINY, **change})
 
 
+PRESETS = sorted((Path(__file__).parent.parent / "cases" / "collapse").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("preset", PRESETS, ids=lambda path: path.stem)
+def test_collapse_presets_are_valid_studies(preset: Path) -> None:
+    """Every preset the README points to loads and builds its preparation (grains in the column)."""
+    from orchestrator.collapse import load_collapse, rain_counts
+
+    study = load_collapse(preset)
+    case = preparation_case(study)
+    assert sum(rain_counts(study)) > 100
+    assert len(case.bodies.spheres) > sum(rain_counts(study))  # the glued bed comes first
+
+
 @pytest.mark.engine
 @requires_liggghts
 def test_campaign_over_slopes_shares_the_preparation(tmp_path: Path) -> None:
