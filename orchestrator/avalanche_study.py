@@ -295,7 +295,8 @@ def _run_study(
     geometry, brick = study.geometry.build(), study.brick.build()
     rundir = outdir / "run"
     packing_record = outdir / "packing.json"
-    if not (rundir / RESULTS).exists():
+    finished_before = (rundir / RESULTS).exists()
+    if not finished_before:
         root = packings if packings is not None else outdir.resolve().parent / "packings"
         packing_dir, reused = ensure_packing(study, root, progress("packing") if progress else None, timeout)
         packed = read_results(packing_dir / RESULTS)
@@ -310,6 +311,8 @@ def _run_study(
     packing_info = json.loads(packing_record.read_text()) if packing_record.exists() else {}
     report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density, **packing_info}
     report["study"] = study.model_dump(mode="json")
+    # Tells a rerun's reader that nothing ran now (the packing record is the first run's).
+    report["finished_before"] = finished_before
     (outdir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     return report
 

@@ -167,6 +167,8 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
     except EngineError as error:
         _fail(str(error), code=3)
     packing = report.get("packing", {})
+    if report.get("finished_before"):
+        console.print(f"already complete in {outdir / 'run'} (delete that directory to run it again); measured again")
     if packing.get("directory"):
         console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
     try:

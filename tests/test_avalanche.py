@@ -155,7 +155,7 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     assert trajectory.n_bodies == study.brick_count
     assert np.isfinite(trajectory.position[-1]).all()  # no brick lost, mass conserved
     assert np.all(trajectory.position[0, :, 0] < 0.0)  # packed in the box, on the slope, at the opening
-    assert report["packing"]["reused"] is False
+    assert report["packing"]["reused"] is False and report["finished_before"] is False
     deposit = report["deposit"]
     assert deposit["bodies_in_deposit"] + deposit["outliers"] == study.brick_count  # every brick accounted for
     assert deposit["x_cm"] > 0.0  # the mass centre ended on the flat board
@@ -167,12 +167,14 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     packed = read_results(packing_dir / RESULTS)
     np.testing.assert_allclose(trajectory.position[0], packed.position[-1], rtol=0, atol=1e-9)
     # Rerunning reuses the packing and the release: nothing new is computed.
-    assert run_study(study, tmp_path / "first", packings=packings)["deposit"] == deposit
+    rerun = run_study(study, tmp_path / "first", packings=packings)
+    assert rerun["deposit"] == deposit and rerun["finished_before"] is True
     # Another release (slipperier board) from the same packing: no new packing run, a different flow.
     slippery = study.model_copy(update={"contacts": study.contacts.model_copy(update={"brick_board": study.contacts.brick_board.model_copy(update={"mu": 0.40})})})
     packing_mtime = (packing_dir / RESULTS).stat().st_mtime_ns
     second = run_study(slippery, tmp_path / "second", packings=packings)
     assert second["packing"]["reused"] is True and second["packing"]["directory"] == str(packing_dir)
+    assert second["finished_before"] is False
     assert (packing_dir / RESULTS).stat().st_mtime_ns == packing_mtime
     assert len([d for d in packings.iterdir() if d.is_dir()]) == 1
     assert second["deposit"]["x_cm"] > deposit["x_cm"]  # less friction on the boards: the mass travels further
