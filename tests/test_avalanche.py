@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from orchestrator.avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
-from orchestrator.avalanche_study import AvalancheStudy, run_study
+from orchestrator.avalanche_study import AvalancheStudy, packing_case, run_study
 from orchestrator.bricks import BrickClump, quaternion_matrix
+from orchestrator.engines import liggghts
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case
 
@@ -128,16 +129,12 @@ def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path, m
     5e-11 m at 0.16 s, about 10 x per 0.01 s, as chaotic granular flow does). A contact missed or
     added would shift a brick by its overlap at once (1e-5 m and more), far above the 1e-8 m allowed.
     """
-    from orchestrator.avalanche_study import packing_case
-    from orchestrator.engines import liggghts
-
     study = tiny_study("liggghts")
     study = study.model_copy(update={"packing": study.packing.model_copy(update={"settle_time": 0.16})})
     pours = []
     for name, cap in (("own_bins", float("inf")), ("capped_bins", 2e5)):
         monkeypatch.setattr(liggghts, "MAX_BINS", cap)
-        case = packing_case(study)
-        run_case(case, tmp_path, tmp_path / name)
+        run_case(packing_case(study), tmp_path, tmp_path / name)
         pours.append(read_results(tmp_path / name / RESULTS))
     assert "binsize 0.02" in (tmp_path / "capped_bins" / "in.liggghts").read_text()
     assert "binsize" not in (tmp_path / "own_bins" / "in.liggghts").read_text()

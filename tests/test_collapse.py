@@ -17,7 +17,7 @@ import pytest
 
 from orchestrator import collapse_metrics as cm
 from orchestrator.case import CaseError
-from orchestrator.collapse import level, parse_collapse, preparation_case, release_case, rough_bed
+from orchestrator.collapse import level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
 from orchestrator.collapse_study import measure, run_collapse
 from orchestrator.engines.common import saved_case
 from orchestrator.results import read_results
@@ -171,12 +171,10 @@ PRESETS = sorted((Path(__file__).parent.parent / "cases" / "collapse").glob("*.y
 @pytest.mark.parametrize("preset", PRESETS, ids=lambda path: path.stem)
 def test_collapse_presets_are_valid_studies(preset: Path) -> None:
     """Every preset the README points to loads and builds its preparation (grains in the column)."""
-    from orchestrator.collapse import load_collapse, rain_counts
-
     study = load_collapse(preset)
-    case = preparation_case(study)
-    assert sum(rain_counts(study)) > 100
-    assert len(case.bodies.spheres) > sum(rain_counts(study))  # the glued bed comes first
+    rained = sum(rain_counts(study))
+    assert rained > 100
+    assert len(preparation_case(study).bodies.spheres) > rained  # the glued bed comes first
 
 
 @pytest.mark.engine
