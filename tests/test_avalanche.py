@@ -182,6 +182,9 @@ def test_preset_studies_load_with_the_paper_brick_counts() -> None:
 
     presets = {p.stem: load_study(p) for p in sorted((Path(__file__).parent.parent / "cases" / "avalanche").glob("*.yaml"))}
     assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
+    soft = presets["random_pour_full_kn2e4"]
+    assert soft.brick_count == presets["random_pour_full"].brick_count and soft.seed == presets["random_pour_full"].seed
+    assert soft.contacts.brick_brick.kn == soft.contacts.brick_board.kn == 2e4
     assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
     assert presets["ordered_pile_bevelled_full"].brick_count == pytest.approx(10000, rel=0.02)
     assert presets["ordered_pile_bevelled_full"].brick.build().bevel_deg == 2.0 and presets["ordered_pile_bevelled_full"].packing.flips
