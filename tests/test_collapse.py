@@ -14,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from orchestrator import collapse_metrics as cm
 from orchestrator.case import CaseError
-from orchestrator.collapse import level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
+from orchestrator.collapse import BED_COVER, level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
 from orchestrator.collapse_study import measure, run_collapse
 from orchestrator.engines.common import saved_case
 from orchestrator.results import read_results
@@ -142,12 +143,35 @@ def test_release_tilts_gravity_and_drops_the_gate() -> None:
 
 
 def test_rough_bed_grains_touch_along_the_channel() -> None:
+    """2D: one row of touching grains (the plane holds one)."""
     study = parse_collapse(TINY)
     centres, radii = rough_bed(study, np.random.default_rng(1))
     gaps = np.diff(centres[:, 0]) - radii[1:] - radii[:-1]
     assert np.abs(gaps).max() < 1e-12
     assert centres[0, 0] - radii[0] == pytest.approx(-0.03) and centres[-1, 0] + radii[-1] <= 0.12
     assert np.allclose(centres[:, 2], radii)  # sitting on the base plane
+
+
+def test_rough_bed_in_3d_is_a_dense_random_monolayer() -> None:
+    """3D: glued grains on the base plane, inside the channel, covering BED_COVER of it with overlaps
+    within the relaxation's tolerance (1 % of d, plus a last sweep), and almost no hole a grain of
+    mean size could drop through to the base plane (a sphere R on the plane clears a glued one r at
+    a horizontal distance of 2 √(rR))."""
+    study = parse_collapse({**TINY, "dimension": 3, "column": {"length": 0.03, "height": 0.021, "width": 0.008}, "bed": {"glued": "random"}})
+    centres, radii = rough_bed(study, np.random.default_rng(1))
+    d, half = 0.002, 0.004
+    assert np.allclose(centres[:, 2], radii)
+    assert (centres[:, 0] - radii).min() >= -0.03 - 1e-12 and (centres[:, 0] + radii).max() <= 0.12 + 1e-12
+    assert (np.abs(centres[:, 1]) + radii).max() <= half + 1e-12
+    assert np.sum(np.pi * radii**2) / (0.15 * 2 * half) == pytest.approx(BED_COVER, abs=0.01)
+    tree = cKDTree(centres[:, :2])
+    pairs = tree.query_pairs(2 * radii.max(), output_type="ndarray")
+    overlap = radii[pairs[:, 0]] + radii[pairs[:, 1]] - np.linalg.norm(centres[pairs[:, 0], :2] - centres[pairs[:, 1], :2], axis=1)
+    assert overlap.max() < 0.02 * d
+    x, y = np.meshgrid(np.linspace(-0.03 + d, 0.12 - d, 600), np.linspace(-half + d / 2, half - d / 2, 9))
+    points = np.column_stack([x.ravel(), y.ravel()])
+    clear = [all(np.hypot(*(centres[j, :2] - q)) >= 2 * math.sqrt(radii[j] * d / 2) for j in near) for q, near in zip(points, tree.query_ball_point(points, 2 * d))]
+    assert np.mean(clear) < 1e-3
 
 
 @pytest.mark.parametrize(
@@ -158,6 +182,8 @@ def test_rough_bed_grains_touch_along_the_channel() -> None:
         ({"channel": {"slope_deg": 50.0}}, "channel.slope_deg"),
         ({"grains": {"polydispersity": 0.7}}, "grains.polydispersity"),
         ({"contacts": {"mu": -0.1}}, "contacts.mu"),
+        ({"bed": {"glued": "random"}}, "bed.glued"),
+        ({"bed": {"glued": "lattice"}}, "bed.glued"),
     ],
 )
 def test_bad_studies_name_the_field(change: dict, field: str) -> None:
