@@ -14,8 +14,10 @@ the thickness *added* since the release, h(x, t) - h(x, 0) (which discounts the 
 there), averaged over 3 d. Slices where it reaches FRONT_THRESHOLD = 0.6 d are grouped into clusters
 (gaps of up to FRONT_MAX_GAP = 6 d below the threshold join them); the front is the downstream end
 of the farthest cluster holding at least FRONT_MIN_GRAINS grains' worth of added material, or 1 %
-of the column. So a single grain, or a handful, thrown ahead of the flow never moves the front, and
-a bed scoured behind the flow (added thickness < 0) does not cut it short.
+of the column, except a cluster detached from the mass behind it and lying against the channel's
+end wall (grains that rolled there one by one and piled up). So a single grain, or a handful,
+thrown ahead of the flow never moves the front, and a bed scoured behind the flow (added
+thickness < 0) does not cut it short.
 """
 
 from __future__ import annotations
@@ -57,12 +59,17 @@ def front_from_profile(edges: np.ndarray, added: np.ndarray, diameter: float, mi
         return 0.0
     breaks = np.flatnonzero(np.diff(qualifying) > FRONT_MAX_GAP + 1)
     widths = np.diff(edges)
-    front = 0.0
-    for cluster in np.split(qualifying, breaks + 1):
+
+    def amount(cluster: np.ndarray) -> float:
         span = slice(cluster[0], cluster[-1] + 1)
-        if np.sum(np.clip(added[span], 0.0, None) * widths[span]) >= min_amount:
-            front = float(edges[cluster[-1] + 1])
-    return front
+        return float(np.sum(np.clip(added[span], 0.0, None) * widths[span]))
+
+    clusters = [cluster for cluster in np.split(qualifying, breaks + 1) if amount(cluster) >= min_amount]
+    if len(clusters) > 1 and clusters[-1][-1] >= len(added) - FRONT_WINDOW:
+        # Detached and against the end wall: grains that rolled away one by one and piled up there
+        # (an open channel would have let them spread); the front is the mass behind.
+        clusters.pop()
+    return float(edges[clusters[-1][-1] + 1]) if clusters else 0.0
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,19 @@ def test_a_small_cluster_ahead_is_ignored_but_a_big_one_counts() -> None:
     assert cm.front_from_profile(edges, added, D, amount) == pytest.approx(edges[131])
 
 
+def test_grains_piled_at_the_end_wall_are_not_the_front() -> None:
+    """Grains that rolled away one by one collect against the end wall (a stopped mass at 2.7 R0
+    read as 7 R0 in a 22° trial): a detached pile there is not the front, a flow reaching it is."""
+    edges = grid().edges
+    added = np.zeros(len(edges) - 1)
+    added[:40] = 0.01  # the stopped mass
+    added[-4:] = 0.004  # the pile against the end wall: 4 slices, far more than five grains
+    amount = 5 * math.pi * D**2 / 4 / FRACTION
+    assert cm.front_from_profile(edges, added, D, amount) == pytest.approx(edges[41])
+    added[40:] = 0.004  # the flow itself reaches the end wall
+    assert cm.front_from_profile(edges, added, D, amount) == pytest.approx(edges[-1])
+
+
 def test_a_scoured_bed_behind_the_flow_does_not_cut_the_front() -> None:
     edges = grid().edges
     added = np.zeros(len(edges) - 1)
