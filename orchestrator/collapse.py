@@ -41,7 +41,8 @@ OVERFILL = 1.2  # rain 20 % more than needed, so levelling always has grains to 
 # the default strip (4 grains wide) relaxes to overlaps of 1 % of d in about a second; at 78 % it
 # takes 6 s, and at 72 % a grain finds a hole down to the base plane on 3e-4 of the bed (4e-5 here).
 BED_COVER = 0.75
-BED_GROWTH_STEPS = 200
+BED_GROWTH_STEPS = 200  # sweeps from 30 % to full size
+BED_MAX_SWEEPS = 3000  # then relax until BED_OVERLAP, or stop here (fixed grains may overlap)
 BED_OVERLAP = 0.01
 
 
@@ -211,7 +212,7 @@ def random_monolayer(study: CollapseStudy, x_range: tuple[float, float], half_wi
     # since the relaxation cannot move a crowd of discs far along a narrow strip.
     slices = x0 + (np.arange(count) + rng.uniform(0.0, 1.0, count)) * (x1 - x0) / count
     xy = np.column_stack([np.clip(slices, x0 + radii, x1 - radii), rng.uniform(-half_width + radii, half_width - radii)])
-    for step in range(BED_GROWTH_STEPS * 15):
+    for step in range(BED_MAX_SWEEPS):
         scale = min(1.0, 0.3 + 0.7 * step / BED_GROWTH_STEPS)
         overlap = _push_apart(xy, radii * scale, (x0, x1), half_width)
         if scale == 1.0 and overlap < BED_OVERLAP * d:
