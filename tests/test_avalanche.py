@@ -185,6 +185,7 @@ def test_preset_studies_load_with_the_paper_brick_counts() -> None:
     soft = presets["random_pour_full_kn2e4"]
     assert soft.brick_count == presets["random_pour_full"].brick_count and soft.seed == presets["random_pour_full"].seed
     assert soft.contacts.brick_brick.kn == soft.contacts.brick_board.kn == 2e4
+    assert soft.release.stop_at_rest is not None and soft.release.stop_at_rest.stray_fraction == 0.01  # the measured 52 min
     assert presets["ordered_pile_full"].brick_count == pytest.approx(10000, rel=0.02)
     assert presets["ordered_pile_bevelled_full"].brick_count == pytest.approx(10000, rel=0.02)
     assert presets["ordered_pile_bevelled_full"].brick.build().bevel_deg == 2.0 and presets["ordered_pile_bevelled_full"].packing.flips

@@ -1,7 +1,8 @@
 """`time.stop_at_rest`: a run ends once its bodies are at rest instead of simulating a fixed duration.
 
-The criterion (case.RestStop): the RMS speed sqrt(Σ m v² / M) of the moving bodies below `speed`,
-checked every `check_interval` from `after` on. Each engine evaluates it itself (LIGGGHTS in the
+The criterion (case.RestStop): the RMS speed sqrt(Σ m v² / M) of the moving bodies below `speed`
+(or, with `stray_fraction` f, the bodies faster than `speed` weighing at most f M), checked every
+`check_interval` from `after` on. Each engine evaluates it itself (LIGGGHTS in the
 deck, YADE in its recorder, cocd in its loop); these tests check, from the recorded frames, that the
 run stopped at the first check that met it and not before, and that the last frame is that state.
 """
@@ -103,9 +104,61 @@ def test_cocd_stops_at_rest_too(tmp_path: Path) -> None:
     assert trajectory.attrs["stopped_at_rest"] == pytest.approx(0.25, abs=1e-3)
 
 
+def stray_ball_case(engine: str, stray_fraction: float | None) -> Case:
+    """The resting spheres, plus a small ball launched at 0.5 m/s along the floor beside them.
+
+    It slides, then rolls at 5/7 of that forever (these laws have no rolling resistance). It weighs
+    2.3 % of the moving mass (radius 3 mm against nine of 5 mm): the RMS speed stays near
+    sqrt(0.023) × 0.36 = 0.054 m/s, far above the 0.001 m/s threshold.
+    """
+    data = resting_spheres_case(engine).model_dump(mode="json")
+    data["bodies"]["spheres"].append({"material": "glass", "radius": 0.003, "position": [-0.05, 0.05, 0.003], "velocity": [0.5, 0.0, 0.0]})
+    data["time"].update(duration=0.5)
+    data["time"]["stop_at_rest"]["stray_fraction"] = stray_fraction
+    if engine == "cocd":
+        data["time"]["step"] = 1e-3
+    return parse_case(data)
+
+
+@pytest.mark.parametrize("engine", [*engine_params(), "cocd"])
+def test_a_stray_body_holds_the_rms_criterion_but_not_the_stray_fraction(engine: str, tmp_path: Path) -> None:
+    """With stray_fraction 5 %, the rolling ball (2.3 %) is left out and the run stops at `after`;
+    without it, the ball's RMS share keeps the run going for the whole duration."""
+    run_case(stray_ball_case(engine, 0.05), tmp_path, tmp_path / "tolerant")
+    stopped = read_results(tmp_path / "tolerant" / RESULTS)
+    assert stopped.attrs["stopped_at_rest"] == pytest.approx(0.25, abs=1e-3)
+    ball = stopped.n_bodies - 1
+    assert np.linalg.norm(stopped.velocity[-1, ball]) > 0.3, "the ball still rolls at the stop"
+    assert stopped.attrs["rest_speed"] > 0.02, "the stop reports the RMS speed, the ball's share included"
+    run_case(stray_ball_case(engine, None), tmp_path, tmp_path / "strict")
+    ran = read_results(tmp_path / "strict" / RESULTS)
+    assert "stopped_at_rest" not in ran.attrs
+    assert ran.time[-1] == pytest.approx(0.5, abs=1e-3)
+
+
+@pytest.mark.parametrize("engine", [*engine_params(), "cocd"])
+def test_glued_spheres_are_not_in_the_moving_mass(engine: str, tmp_path: Path) -> None:
+    """A glued sphere of radius 1 cm (8 × a 5 mm sphere) next to the rolling ball, with stray_fraction
+    1.5 %: the ball weighs 2.3 % of the moving mass, so the run must not stop. Counting the glued
+    sphere in the moving mass would make it 1.25 % and stop the run at `after`."""
+    data = stray_ball_case(engine, 0.015).model_dump(mode="json")
+    data["bodies"]["spheres"].append({"material": "glass", "radius": 0.01, "position": [0.15, -0.05, 0.01], "fixed": True})
+    run_case(parse_case(data), tmp_path, tmp_path / "run")
+    ran = read_results(tmp_path / "run" / RESULTS)
+    assert "stopped_at_rest" not in ran.attrs
+    assert ran.time[-1] == pytest.approx(0.5, abs=1e-3)
+
+
 @pytest.mark.parametrize(
     ("field", "value", "allowed"),
-    [("speed", 0.0, "greater than 0"), ("speed", 11.0, "less than or equal to 10"), ("after", -1.0, "greater than or equal to 0"), ("check_interval", 0.0, "greater than 0")],
+    [
+        ("speed", 0.0, "greater than 0"),
+        ("speed", 11.0, "less than or equal to 10"),
+        ("after", -1.0, "greater than or equal to 0"),
+        ("check_interval", 0.0, "greater than 0"),
+        ("stray_fraction", 0.5, "less than or equal to 0.1"),
+        ("stray_fraction", -0.01, "greater than or equal to 0"),
+    ],
 )
 def test_bad_settings_name_the_field(field: str, value: float, allowed: str) -> None:
     data = resting_spheres_case("liggghts").model_dump(mode="json")

@@ -58,8 +58,12 @@ def at_rest(scene: Scene, rest: dict | None, n: int, last_stage: int) -> bool:
     if not rest or n < first_check or (n - first_check) % rest["every"]:
         return False
     moving = ~scene.fixed
-    speed = float(np.sqrt(np.sum(scene.mass[moving] * np.sum(scene.velocity[moving] ** 2, axis=1)) / rest["mass"]))
-    if speed >= rest["speed"]:
+    squared = np.sum(scene.velocity[moving] ** 2, axis=1)
+    speed = float(np.sqrt(np.sum(scene.mass[moving] * squared) / rest["mass"]))
+    if rest.get("stray_fraction") is None:
+        if speed >= rest["speed"]:
+            return False
+    elif np.sum(scene.mass[moving][squared > rest["speed"] ** 2]) > rest["stray_fraction"] * rest["mass"]:
         return False
     print(f"DEMORCH_AT_REST step {n} speed {speed!r}", flush=True)
     return True

@@ -79,14 +79,16 @@ def body_inertia(case: Case) -> np.ndarray:
 AT_REST_MARKER = "DEMORCH_AT_REST"
 
 
-def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float] | None:
+def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float | None] | None:
     """What a YADE script or cocd deck needs to stop at rest: check period and first step (whole output
-    intervals), the speed threshold and the moving mass M. None: run the whole duration."""
+    intervals), the speed threshold, the moving mass M and the stray fraction (None: the RMS criterion).
+    None: run the whole duration."""
     checks = physics.rest_check_steps(case, plan)
     if checks is None:
         return None
     every, after = checks
-    return {"every": every, "after": after, "speed": case.time.stop_at_rest.speed, "mass": moving_mass(case)}
+    rest = case.time.stop_at_rest
+    return {"every": every, "after": after, "speed": rest.speed, "mass": moving_mass(case), "stray_fraction": rest.stray_fraction}
 
 
 def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:

@@ -27,7 +27,7 @@ STATE_NAME = "state.restart"  # written at the end when the case has `save_state
 INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from, linked into the run
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
 
-_THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)\s*$")
+_THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
 
 
 def _package_version(package: str) -> str | None:
@@ -182,7 +182,7 @@ def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) ->
     start = plan.total_steps - last_segment_steps
     first = min(max(0, rest["after"] - start), last_segment_steps)
     chunks, remainder = divmod(last_segment_steps - first, rest["every"])
-    return {**rest, "first": first, "chunks": chunks, "remainder": remainder}
+    return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "speed_squared": float(rest["speed"]) ** 2}
 
 
 class ThermoWatcher:
