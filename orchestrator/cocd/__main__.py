@@ -60,10 +60,11 @@ def at_rest(scene: Scene, rest: dict | None, n: int, last_stage: int) -> bool:
     moving = ~scene.fixed
     squared = np.sum(scene.velocity[moving] ** 2, axis=1)
     speed = float(np.sqrt(np.sum(scene.mass[moving] * squared) / rest["mass"]))
-    if rest.get("stray_fraction") is None:
-        if speed >= rest["speed"]:
-            return False
-    elif np.sum(scene.mass[moving][squared > rest["speed"] ** 2]) > rest["stray_fraction"] * rest["mass"]:
+    if rest["stray_fraction"] is None:
+        resting = speed < rest["speed"]
+    else:  # the bodies faster than "speed" weigh at most this fraction of M
+        resting = np.sum(scene.mass[moving][squared > rest["speed"] ** 2]) <= rest["stray_fraction"] * rest["mass"]
+    if not resting:
         return False
     print(f"DEMORCH_AT_REST step {n} speed {speed!r}", flush=True)
     return True
