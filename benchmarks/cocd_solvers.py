@@ -28,8 +28,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from orchestrator.cocd.solver import Scene, Walls, step  # noqa: E402
-from orchestrator.collapse import parse_collapse, preparation_case  # noqa: E402
+from orchestrator.engines.cocd.solver import Scene, Walls, step  # noqa: E402
+from orchestrator.studies.collapse.spec import parse_collapse
+from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
 from orchestrator.physics import sphere_mass  # noqa: E402
 
 RESULT = REPO / "docs" / "benchmarks" / "cocd_solvers.json"

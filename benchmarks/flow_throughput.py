@@ -38,13 +38,16 @@ sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
 from orchestrator.case import RestStop  # noqa: E402
-from orchestrator.avalanche_study import AvalancheStudy, ContactSpec, ensure_packing, load_study, packing_state_file, release_case, with_engine  # noqa: E402
-from orchestrator.collapse import load_collapse, preparation_case  # noqa: E402
-from orchestrator.collapse import release_case as collapse_release_case  # noqa: E402
-from orchestrator.collapse import with_engine as collapse_with_engine  # noqa: E402
-from orchestrator.engines import MPI_ENV, default_grid, liggghts  # noqa: E402
+from orchestrator.studies.avalanche.study import AvalancheStudy, ContactSpec, ensure_packing, load_study, packing_state_file, release_case
+from orchestrator.case import with_engine  # noqa: E402
+from orchestrator.studies.collapse.spec import load_collapse
+from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
+from orchestrator.studies.collapse.spec import release_case as collapse_release_case  # noqa: E402
+from orchestrator.case import with_engine as collapse_with_engine  # noqa: E402
+from orchestrator.engines.liggghts import adapter as liggghts  # noqa: E402
+from orchestrator.engines.mpi import MPI_ENV, default_grid  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
-from orchestrator.reuse import ensure_run  # noqa: E402
+from orchestrator.runner import ensure_run  # noqa: E402
 from orchestrator.runner import RESULTS, run_case  # noqa: E402
 
 FULL_SCALE = REPO / "cases" / "avalanche" / "random_pour_full.yaml"

@@ -30,8 +30,9 @@ sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
 from orchestrator.case import Case  # noqa: E402
-from orchestrator.avalanche_study import load_study, run_study, with_engine  # noqa: E402
-from orchestrator.engines import liggghts_grid, liggghts_processes  # noqa: E402
+from orchestrator.studies.avalanche.study import load_study, run_study
+from orchestrator.case import with_engine  # noqa: E402
+from orchestrator.engines.mpi import mpi_processes as liggghts_processes, processor_grid as liggghts_grid  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 
 STUDY = REPO / "cases" / "avalanche" / "random_pour_full.yaml"

@@ -26,7 +26,7 @@ sys.path.insert(0, str(REPO))
 
 from engine_throughput import study_of  # noqa: E402
 
-from orchestrator.avalanche_study import packing_case  # noqa: E402
+from orchestrator.studies.avalanche.study import packing_case  # noqa: E402
 from orchestrator.runner import run_case  # noqa: E402
 
 DURATION = 0.1

@@ -9,12 +9,15 @@ from __future__ import annotations
 import math
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Literal, Union, get_args, get_origin
+from typing import Annotated, Literal, TypeVar, Union
 
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .bricks import BrickClump, brick_clump
+from orchestrator.bricks import BrickClump, brick_clump
+from orchestrator.engines.registry import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.engines.settings import EngineSections
+from orchestrator.validation import CaseError, ModelT, format_error, parse_model, read_yaml  # noqa: F401  (re-exported)
 
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
 # inert there and makes quotes, spaces and newlines a validation error rather than an injection.
@@ -39,27 +42,10 @@ def Real(**bounds: float) -> object:
     return Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, **bounds)]
 
 
-class CaseError(ValueError):
-    """A case file that cannot be run; the message names the field and the allowed range."""
-
-
 class Strict(BaseModel):
     """Base for all case sections: unknown keys are errors, numbers written as "1e5" (a YAML string) are accepted."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class Engine(str, Enum):
-    liggghts = "liggghts"
-    yade = "yade"
-    cocd = "cocd"  # convex optimisation contact dynamics (orchestrator/cocd): spheres, implicit, no stiffness
-
-
-class CocdSettings(Strict):
-    """The cocd engine's solver: Clarabel (interior point, reference), SCS (first order), PIQP (2D only)."""
-
-    solver: Literal["clarabel", "scs", "piqp"] = "clarabel"
-    tolerance: Real(gt=0.0, le=1e-2) = 1e-8
 
 
 class RestStop(Strict):
@@ -245,11 +231,11 @@ class Domain(Strict):
         return self
 
 
-class Case(Strict):
-    """One simulation, engine-neutral."""
+class Case(EngineSections, Strict):
+    """One simulation, engine-neutral (the sections one engine reads come from EngineSections)."""
 
     name: Name
-    engine: Engine = Engine.liggghts
+    engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 12345
     time: TimeSettings
     gravity: Vec3 = (0.0, 0.0, -9.81)
@@ -270,7 +256,6 @@ class Case(Strict):
     # lie in y = const stay there by symmetry; YADE also blocks those degrees of freedom, LIGGGHTS
     # zeroes the y force.
     planar: bool = False
-    cocd: CocdSettings = CocdSettings()  # used by engine: cocd only
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":
@@ -314,6 +299,14 @@ class Case(Strict):
             raise ValueError("time.output_interval: must not exceed time.duration")
         return self
 
+    @model_validator(mode="after")
+    def _engine_can_run(self) -> "Case":
+        """What the chosen engine cannot run is a case error, from its declared capabilities."""
+        problem = engine_limits(self)
+        if problem:
+            raise ValueError(problem)
+        return self
+
     def body_materials(self) -> list[str]:
         """Materials that bodies are made of, in the order of `materials`."""
         used = {s.material for s in self.bodies.spheres} | {c.material for c in self.bodies.clumps}
@@ -342,84 +335,45 @@ class Case(Strict):
         return next(p for p in self.contacts if p.key == key)
 
 
-_BOUND_ERRORS = {"greater_than", "greater_than_equal", "less_than", "less_than_equal"}
+def engine_limits(case: Case) -> str | None:
+    """The first part of `case` that its engine cannot run, as `field: reason; engines that can: …`."""
+    from orchestrator.engines.registry import engines_with
 
-
-def _allowed_range(location: tuple[object, ...]) -> str | None:
-    """'(0, 1e12]'-style range of the numeric field at `location`, from its Field constraints."""
-    annotation: object = Case
-    info = None
-    for part in location:
-        while get_origin(annotation) in (list, tuple, Union) or str(get_origin(annotation)) == "typing.Annotated":
-            if get_origin(annotation) in (list, tuple):
-                annotation = get_args(annotation)[0]
-            elif get_origin(annotation) is Union:
-                annotation = next((a for a in get_args(annotation) if isinstance(a, type) and issubclass(a, BaseModel)), annotation)
-                break
-            else:
-                annotation = get_args(annotation)[0]
-        if isinstance(part, int):
-            continue
-        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)) or part not in annotation.model_fields:
-            return None
-        info = annotation.model_fields[part]
-        annotation = info.annotation
-    if info is None:
-        return None
-    low = high = None
-    low_open = high_open = True
-    for constraint in info.metadata:
-        for name, closed in (("gt", False), ("ge", True)):
-            if getattr(constraint, name, None) is not None:
-                low, low_open = getattr(constraint, name), not closed
-        for name, closed in (("lt", False), ("le", True)):
-            if getattr(constraint, name, None) is not None:
-                high, high_open = getattr(constraint, name), not closed
-    if low is None and high is None:
-        return None
-    left = "(" if low_open or low is None else "["
-    right = ")" if high_open or high is None else "]"
-    return f"{left}{'-inf' if low is None else low:.10g}, {'inf' if high is None else high:.10g}{right}"
-
-
-def _format_error(error: ValidationError) -> str:
-    """One line: `field.path: message (got value)` for each problem, joined by '; '."""
-    lines = []
-    for item in error.errors():
-        location = tuple(part for part in item["loc"] if isinstance(part, int) or ("[" not in part and "(" not in part))
-        message = item["msg"].removeprefix("Value error, ")
-        if item["type"] == "string_pattern_mismatch":
-            message = "must start with a letter and hold only letters, digits and '_' (1 to 40 characters)"
-        if item["type"] in _BOUND_ERRORS:
-            allowed = _allowed_range(location)
-            message = f"{message}; allowed range: {allowed}" if allowed else message
-        text = f"{'.'.join(str(p) for p in location)}: {message}" if location else message
-        if location and item["type"] != "missing":
-            shown = repr(item.get("input"))
-            text += f" (got {shown[:57] + '...' if len(shown) > 60 else shown})"
-        lines.append(text)
-    return "; ".join(lines)
+    can = capabilities(case.engine)
+    engine = case.engine.value
+    checks = [
+        ("bodies.clumps", bool(case.bodies.clumps), "clumps", f"{engine} takes spheres only"),
+        ("bodies", bool(case.bodies.clumps and case.bodies.spheres), "mixed_bodies",
+         f"{engine} runs either spheres or clumps in one case, not both"),
+        ("initial_state", case.initial_state is not None, "restart",
+         f"{engine} cannot start from a state file; give the saved positions, orientations and velocities in `bodies`"),
+        ("walls", any(isinstance(w, MeshWall) for w in case.walls), "meshes", f"{engine} takes rectangle walls only"),
+    ]
+    for field, used, capability, reason in checks:
+        if used and not getattr(can, capability):
+            return f"{field}: {reason}; engines that can: {', '.join(engines_with(**{capability: True}))}"
+    return None
 
 
 def parse_case(data: object, source: str = "case") -> Case:
     """Validate a mapping (from YAML or code) into a Case, raising CaseError with a one-line message."""
     if not isinstance(data, dict):
         raise CaseError(f"{source}: the case must be a mapping of fields, got {type(data).__name__}")
+    return parse_model(Case, data, source)
+
+
+def with_engine(model: ModelT, engine: str | None, source: str = "case") -> ModelT:
+    """A case or study on another engine (`-e`), validated again (the engine may not run it);
+    None keeps its own. Raises CaseError naming the field the engine cannot take."""
+    if engine is None:
+        return model
     try:
-        return Case.model_validate(data)
+        return type(model).model_validate({**model.model_dump(mode="json"), "engine": engine})
     except ValidationError as error:
-        raise CaseError(f"{source}: {_format_error(error)}") from None
+        raise CaseError(f"{source} on {engine}: {format_error(error, Case)}") from None
 
 
 def load_case(path: str | Path) -> Case:
     """Read and validate a YAML case file."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise CaseError(f"{path}: cannot read the case file ({error.strerror})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        raise CaseError(f"{path}: not valid YAML ({str(error).splitlines()[0]})") from None
-    return parse_case(data, source=str(path))
+    return parse_case(read_yaml(path), source=str(path))
+

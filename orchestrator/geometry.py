@@ -10,8 +10,8 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from . import physics
-from .case import Case, CaseError, Domain, MeshWall, RectangleWall, Wall
+from orchestrator import physics
+from orchestrator.case import Case, CaseError, Domain, MeshWall, RectangleWall, Wall
 
 
 def rectangle_triangles(wall: RectangleWall) -> np.ndarray:

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
-from .case import Case, CaseError, ContactLaw, Engine, Sphere
+from orchestrator.case import Case, CaseError, ContactLaw, Sphere
+from orchestrator.engines.registry import capabilities
 
 
 def sphere_mass(sphere: Sphere, density: float) -> float:
@@ -158,9 +159,6 @@ def contact_duration(kn: float, mass: float) -> float:
     return math.pi * math.sqrt(mass / kn)
 
 
-COCD_DEFAULT_STEP = 1e-3  # s: the study's 2D step; cocd has no contact duration (no stiffness)
-
-
 def time_step(case: Case) -> float:
     """The case's Δt: given, or safety_factor × the shortest contact duration over touching pairs.
 
@@ -170,8 +168,9 @@ def time_step(case: Case) -> float:
     """
     if case.time.step != "auto":
         return float(case.time.step)
-    if case.engine is Engine.cocd:
-        return COCD_DEFAULT_STEP
+    can = capabilities(case.engine)
+    if can.implicit:  # no stiffness, no contact duration: the engine's own step
+        return float(can.default_step)
     smallest = smallest_masses(case)
     durations = []
     for pair in case.contacts:
@@ -185,7 +184,7 @@ def time_step(case: Case) -> float:
 
 
 def default_safety_factor(case: Case) -> float:
-    """0.02 (50 steps per contact) for the bilinear law on LIGGGHTS, else 0.01 (100 steps).
+    """0.02 (50 steps per contact) for the compiled bilinear law (LIGGGHTS), else 0.01 (100 steps).
 
     Measured (2026-11-23): the compiled bilinear law has no damping term, so its error is only the
     discrete overlap. At 50 steps a 50-brick pile settles to 1.7e-7 of its energy drop in 1 s (limit
@@ -198,7 +197,7 @@ def default_safety_factor(case: Case) -> float:
     (100 bricks) it is 1.3e-6. Residual motion grows steeply with the step, too close to the limit
     to trade for 1.5 × speed.
     """
-    return 0.02 if case.engine is Engine.liggghts and case.law is ContactLaw.bilinear else 0.01
+    return 0.02 if capabilities(case.engine).compiled_law and case.law is ContactLaw.bilinear else 0.01
 
 
 @dataclass(frozen=True)

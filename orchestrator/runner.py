@@ -2,93 +2,116 @@
 
 run.json is rewritten at each stage (atomically), so a run directory always says how far it got.
 Nothing in it is ever deleted: a failed run keeps its deck, its log and whatever frames it wrote.
+`ensure_run` makes a run once under a content address (its run id) and reuses it afterwards:
+settled packings, prepared columns.
 """
 
 from __future__ import annotations
 
-import datetime as dt
-import json
-import os
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
-from . import __version__, metrics
-from .case import Case, Engine
-from .engines import EngineError, get_adapter
-from .engines.base import ProgressCallback
-from .render import template_hash
-from .results import write_results
+from orchestrator import __version__, rundir
+from orchestrator.case import Case
+from orchestrator.engines import EngineError, get_adapter
+from orchestrator.engines.base import ProgressCallback
+from orchestrator.post import summary
+from orchestrator.results import write_results
 
-RUN_RECORD = "run.json"
-RESULTS = "results.h5"
-
-
-def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
-    os.replace(temporary, path)
+RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
 
 
-def _now() -> str:
-    return dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
-
-
-def with_engine(case: Case, engine: str | None) -> Case:
-    return case if engine is None else case.model_copy(update={"engine": Engine(engine)})
-
-
-def render_case(case: Case, case_dir: Path, rundir: Path) -> Path:
+def render_case(case: Case, case_dir: Path, directory: Path) -> Path:
     """Write the deck (and its data files) only; returns the deck path."""
-    rundir.mkdir(parents=True, exist_ok=True)
-    return get_adapter(case.engine.value).write_input(case, case_dir, rundir)
+    directory.mkdir(parents=True, exist_ok=True)
+    rundir.save_inputs(directory, case)
+    return get_adapter(case.engine.value).write_input(case, case_dir, directory)
 
 
 def run_case(
     case: Case,
     case_dir: Path,
-    rundir: Path,
+    directory: Path,
     progress: ProgressCallback | None = None,
     timeout: float | None = None,
 ) -> dict[str, Any]:
-    """Run a validated case in rundir and return the run record (also saved as run.json).
+    """Run a validated case in `directory` and return the run record (also saved as run.json).
 
-    Raises EngineError (after recording the failure in run.json) when the engine fails.
+    Holds the directory's lock while it runs (rundir.Busy if another process holds it). Raises
+    EngineError (after recording the failure in run.json) when the engine fails.
     """
+    with rundir.locked(directory, wait=False):
+        return run_locked(case, case_dir, directory, progress, timeout)
+
+
+def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCallback | None, timeout: float | None) -> dict[str, Any]:
+    """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
     adapter = get_adapter(case.engine.value)
-    deck = render_case(case, case_dir, rundir)
-    info = adapter.info()
+    build = rundir.build_stamp(case.engine.value)
+    deck = render_case(case, case_dir, directory)
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
-        "case": case.model_dump(mode="json"),
-        "engine": info.name,
-        "engine_version": info.version,
-        "template_hash": template_hash(info.name),
+        "kind": "case",
+        "run_id": rundir.run_id(case, build),
+        "build": build,
+        "engine": build["engine"],
+        "engine_version": build["version"],
         "deck": deck.name,
         "status": "running",
-        "started": _now(),
+        "started": rundir.now(),
     }
-    record_path = rundir / RUN_RECORD
-    write_json_atomic(record_path, record)
+    record_path = directory / RUN_RECORD
+    rundir.write_json_atomic(record_path, record)
     started = time.perf_counter()
     try:
-        adapter.execute(rundir, progress=progress, timeout=timeout)
-        trajectory = adapter.read_output(rundir)
+        adapter.execute(case, directory, progress=progress, timeout=timeout)
+        trajectory = adapter.read_output(case, directory)
     except EngineError as error:
         record.update(status="failed", error=error.summary, log_tail=error.tail, wall_time_s=time.perf_counter() - started)
-        write_json_atomic(record_path, record)
+        rundir.write_json_atomic(record_path, record)
         raise
     engine_seconds = time.perf_counter() - started
-    trajectory.attrs.update(engine=info.name, engine_version=info.version or "unknown", case_name=case.name)
-    write_results(rundir / RESULTS, trajectory)
+    trajectory.attrs.update(engine=build["engine"], engine_version=build["version"] or "unknown", case_name=case.name)
+    write_results(directory / RESULTS, trajectory)
     record.update(
         status="completed",
-        finished=_now(),
+        finished=rundir.now(),
         wall_time_s=time.perf_counter() - started,
         engine_wall_time_s=engine_seconds,
         frames=trajectory.n_frames,
         bodies=trajectory.n_bodies,
-        metrics=metrics.summary(trajectory),
+        metrics=summary.summary(trajectory),
     )
-    write_json_atomic(record_path, record)
+    rundir.write_json_atomic(record_path, record)
     return record
+
+
+def ensure_run(
+    case: Case,
+    root: Path,
+    what: str,
+    state_file: Callable[[Path], Path | None] = lambda directory: None,
+    progress: Callable[[float, float], None] | None = None,
+    timeout: float | None = None,
+) -> tuple[Path, bool]:
+    """Run `case` once under root/<run id>/ and reuse it afterwards. Returns (directory, reused).
+
+    The directory's lock serialises processes that need the same run (campaign workers, say): the
+    first runs it, the others wait and reuse it. A run is reused only when it is completed and
+    current (rundir.status) and the state file it must leave (`state_file(directory)`, if any)
+    exists; a failed or interrupted attempt is moved to root/attic. `what` names the run in errors
+    ("the packing run failed: …").
+    """
+    directory = root / rundir.run_id(case)
+    with rundir.locked(directory, wait=True):
+        required = state_file(directory)
+        if rundir.status(directory, held=True) == "completed" and (required is None or required.is_file()):
+            return directory, True
+        if any(entry.name != rundir.LOCK for entry in directory.iterdir()):
+            rundir.retire(directory, root)
+        try:
+            run_locked(case, root, directory, progress, timeout)
+        except EngineError as error:
+            raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
+    return directory, False

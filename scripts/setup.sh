@@ -32,7 +32,7 @@ if [ ! -f "$stamp" ]; then
   touch "$stamp"
 fi
 
-if .venv/bin/python -c "import orchestrator.contact_build" 2>/dev/null; then
+if [ -x .venv/bin/demorch ]; then
   .venv/bin/demorch build-contact >/dev/null
 fi
 echo "setup: ready (.venv/bin/demorch doctor shows the details)"

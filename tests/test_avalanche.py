@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
-from orchestrator.avalanche_study import AvalancheStudy, packing_case, run_study
+from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
+from orchestrator.studies.avalanche.study import AvalancheStudy, packing_case, run_study
 from orchestrator.bricks import BrickClump, quaternion_matrix
-from orchestrator.engines import liggghts
+from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case
 
@@ -63,7 +63,7 @@ def test_ordered_pile_lays_bricks_along_the_slope_at_near_full_density() -> None
 
 def test_flipped_bevelled_pile_turns_bricks_at_random_and_keeps_each_inside_its_cell() -> None:
     """Random flips: each brick half-turned about one of its axes or not, with a seed; no two overlap."""
-    from orchestrator.avalanche import HALF_TURNS, pile_rows
+    from orchestrator.studies.avalanche.geometry import HALF_TURNS, pile_rows
 
     geometry, bevelled, gap = AvalancheGeometry(), BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1), bevel_deg=2.0), 0.0005
     count = 400
@@ -178,7 +178,7 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
 
 
 def test_preset_studies_load_with_the_paper_brick_counts() -> None:
-    from orchestrator.avalanche_study import load_study
+    from orchestrator.studies.avalanche.study import load_study
 
     presets = {p.stem: load_study(p) for p in sorted((Path(__file__).parent.parent / "cases" / "avalanche").glob("*.yaml"))}
     assert presets["random_pour_full"].brick_count == pytest.approx(6300, rel=0.02)
@@ -200,7 +200,8 @@ def test_packing_law_must_match_the_flow_law() -> None:
 
 def test_packing_key_ignores_what_happens_after_the_opening() -> None:
     """Studies that differ only in the flow's contacts or duration share a packing; a packing input changes it."""
-    from orchestrator.avalanche_study import packing_key, with_engine
+    from orchestrator.case import with_engine
+    from orchestrator.studies.avalanche.study import packing_key
 
     study = tiny_study("liggghts")
     longer = study.model_copy(update={"release": study.release.model_copy(update={"duration": 3.0})})
@@ -214,7 +215,8 @@ def test_packing_key_ignores_what_happens_after_the_opening() -> None:
 
 def test_engine_override_gives_a_runnable_study() -> None:
     """`demorch avalanche -e yade`: the study, and the cases it expands into, run on the engine asked for."""
-    from orchestrator.avalanche_study import packing_case, with_engine
+    from orchestrator.case import with_engine
+    from orchestrator.studies.avalanche.study import packing_case
 
     study = with_engine(tiny_study("liggghts"), "yade")
     assert packing_case(study).engine.value == "yade" and packing_case(study).save_state is False
@@ -223,7 +225,7 @@ def test_engine_override_gives_a_runnable_study() -> None:
 
 def test_reference_numbers_fall_back_to_the_packaged_copy(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """Installed without the project's shared/ folder, reports still have their reference numbers."""
-    import orchestrator.avalanche_study as avalanche_study
+    import orchestrator.studies.avalanche.study as avalanche_study
 
     monkeypatch.delenv("DEMORCH_REFERENCE", raising=False)
     monkeypatch.setattr(avalanche_study, "SHARED_REFERENCE", tmp_path / "absent.toml")

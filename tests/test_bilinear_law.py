@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.bilinear_law import BilinearNormal, tangential_step
+from orchestrator.contact.law import BilinearNormal, tangential_step
 
 from conftest import requires_liggghts
 
@@ -81,7 +81,7 @@ run 400
 def test_compiled_model_matches_the_reference_at_every_step(tmp_path: Path) -> None:
     import subprocess
 
-    from orchestrator.contact_build import ensure_plugin, liggghts_env
+    from orchestrator.engines.liggghts.plugin import ensure_plugin, liggghts_env
 
     (tmp_path / "in.deck").write_text(DECK.format(kn=KN, en2=EN2))
     env = {**__import__("os").environ, **liggghts_env(ensure_plugin())}
@@ -104,7 +104,7 @@ def _frames(path: Path) -> np.ndarray:
 
 @requires_liggghts
 def test_build_is_cached_outside_the_clone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from orchestrator import contact_build
+    from orchestrator.engines.liggghts import plugin as contact_build
 
     monkeypatch.setenv("DEMORCH_CACHE", str(tmp_path / "cache"))
     started = time.perf_counter()

@@ -174,7 +174,7 @@ def test_avalanche_campaign_shares_one_packing(tmp_path: Path) -> None:
 
 
 def test_example_avalanche_campaign_is_nine_studies_on_one_packing() -> None:
-    from orchestrator.avalanche_study import AvalancheStudy, packing_key
+    from orchestrator.studies.avalanche.study import AvalancheStudy, packing_key
 
     spec, base = load_campaign(REPO / "campaigns" / "avalanche_small_board_contacts.yaml")
     expanded = expand(spec, base)

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 from orchestrator.case import CaseError, load_case
-from orchestrator.cli import main
+from orchestrator.cli.main import main
 
 BAD_CASES = sorted((Path(__file__).parent / "cases" / "bad").glob("*.yaml"))
 

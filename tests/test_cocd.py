@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.cocd.solver import Scene, Walls, smallest_gap, step
-from orchestrator.collapse import parse_collapse
-from orchestrator.collapse_study import run_collapse
+from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
+from orchestrator.studies.collapse.spec import parse_collapse
+from orchestrator.studies.collapse.study import run_collapse
 from orchestrator.results import read_results
 from orchestrator.case import parse_case
 from orchestrator.runner import run_case

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from orchestrator import collapse_metrics as cm
+from orchestrator.post import collapse as cm
 from orchestrator.case import CaseError
-from orchestrator.collapse import BED_COVER, level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
-from orchestrator.collapse_study import measure, run_collapse
-from orchestrator.engines.common import saved_case
+from orchestrator.studies.collapse.spec import BED_COVER, level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
+from orchestrator.studies.collapse.study import measure, run_collapse
+from orchestrator.rundir import saved_case
 from orchestrator.results import read_results
 
 from conftest import requires_liggghts

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator import collapse_calibrate
-from orchestrator.collapse import parse_collapse
+from orchestrator.studies.collapse import calibrate as collapse_calibrate
+from orchestrator.studies.collapse.spec import parse_collapse
 
 STUDY = parse_collapse({"name": "h", "channel": {"slope_deg": 0.0, "length": 0.3}})
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from orchestrator import collapse_metrics as cm
+from orchestrator.post import collapse as cm
 
 D = 0.002  # mean grain diameter of the constructed deposits
 FRACTION = 0.8

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from orchestrator.deposit import deposit_metrics
+from orchestrator.post.deposit import deposit_metrics
 
 R = 0.005  # body radius used for every constructed body
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from orchestrator.engines import EngineError
-from orchestrator.engines.liggghts import LiggghtsAdapter
-from orchestrator.engines.yade import YadeAdapter
+from orchestrator.engines.liggghts.adapter import LiggghtsAdapter
+from orchestrator.engines.yade.adapter import YadeAdapter
 from orchestrator.runner import RUN_RECORD, render_case, run_case
 
 from conftest import free_fall_case, requires_liggghts, requires_yade

@@ -12,7 +12,8 @@ import pytest
 
 from orchestrator.case import Case
 from orchestrator.results import Trajectory, layout, read_results
-from orchestrator.runner import RESULTS, run_case, with_engine
+from orchestrator.case import with_engine
+from orchestrator.runner import RESULTS, run_case
 
 from conftest import engine_params, free_fall_case, requires_liggghts, requires_yade, slope_vectors, sliding_case
 
@@ -86,7 +87,7 @@ def test_both_engines_give_one_layout_and_one_trajectory(tmp_path: Path) -> None
 @pytest.mark.engine
 def test_binary_dump_keeps_every_whole_frame_and_drops_a_cut_one(tmp_path: Path) -> None:
     """LIGGGHTS writes a binary dump; a frame cut short (engine killed mid-write) is dropped, the rest read."""
-    from orchestrator.engines.liggghts import DUMP_NAME, SPHERE_COLUMNS, read_binary_dump
+    from orchestrator.engines.liggghts.adapter import DUMP_NAME, SPHERE_COLUMNS, read_binary_dump
 
     run_case(free_fall_case("liggghts"), tmp_path, tmp_path / "run")
     path = tmp_path / "run" / DUMP_NAME

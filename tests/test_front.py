@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orchestrator.front import flat_phases, front_curve, front_position
+from orchestrator.post.front import flat_phases, front_curve, front_position
 
 
 def test_front_ignores_a_single_stray_body() -> None:

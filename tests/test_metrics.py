@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from orchestrator.metrics import centre_of_mass, kinetic_energy
+from orchestrator.post.summary import centre_of_mass, kinetic_energy
 from orchestrator.results import Trajectory
 
 

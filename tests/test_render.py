@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 from orchestrator.case import CaseError, parse_case
-from orchestrator.engines.yade_materials import series, split_in_series
+from orchestrator.engines.yade.materials import series, split_in_series
 from orchestrator.physics import pair_constants
-from orchestrator.render import environment, py_literal
-from orchestrator.runner import render_case, with_engine
+from orchestrator.engines.templating import environment, py_literal
+from orchestrator.case import with_engine
+from orchestrator.runner import render_case
 
 from conftest import sliding_case
 
@@ -103,8 +104,8 @@ def test_initial_state_errors_come_before_any_engine(tmp_path: Path, no_engine_p
     with pytest.raises(CaseError, match=r"^initial_state: no state file at .*no_such\.restart"):
         render_case(case, tmp_path, tmp_path / "run")
     (tmp_path / "packed.restart").write_bytes(b"state")
-    with pytest.raises(CaseError, match=r"^initial_state: LIGGGHTS only"):
-        render_case(with_engine(case, "yade").model_copy(update={"initial_state": "packed.restart"}), tmp_path, tmp_path / "yade")
+    with pytest.raises(CaseError, match=r"initial_state: yade cannot start from a state file.*engines that can: liggghts"):
+        with_engine(case.model_copy(update={"initial_state": "packed.restart"}), "yade")
 
 
 def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
@@ -120,7 +121,8 @@ def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
 
 def test_mpi_settings_reach_the_command_and_the_deck(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """DEMORCH_LIGGGHTS_MPI / _GRID change how LIGGGHTS is launched and split, not the case."""
-    from orchestrator.engines import default_grid, get_adapter
+    from orchestrator.engines import get_adapter
+    from orchestrator.engines.mpi import default_grid
 
     monkeypatch.setenv("DEMORCH_LIGGGHTS_MPI", "2")
     monkeypatch.delenv("DEMORCH_LIGGGHTS_GRID", raising=False)
@@ -152,7 +154,7 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None
     distance test, so the slide must come out identical (to round-off) with either binning.
     """
     from orchestrator.case import Domain
-    from orchestrator.engines import liggghts
+    from orchestrator.engines.liggghts import adapter as liggghts
 
     MAX_BINS = liggghts.MAX_BINS
     from orchestrator.results import read_results

@@ -10,8 +10,8 @@ import pytest
 
 from orchestrator.bricks import BrickClump
 from orchestrator.case import Case, parse_case
-from orchestrator.metrics import kinetic_energy
-from orchestrator.packing import loose_grid
+from orchestrator.post.summary import kinetic_energy
+from orchestrator.studies.avalanche.packing import loose_grid
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
 

@@ -27,13 +27,14 @@ import pandas as pd
 import yaml
 from pydantic import Field, ValidationError
 
-from ..bricks import quaternion_matrix
-from ..case import Case, CaseError, Name, Strict, _format_error, parse_case
-from ..results import Trajectory, read_results
-from ..runner import RESULTS
-from . import store
-from .execute import perform
-from .spec import ParameterPath, set_path
+from orchestrator.bricks import quaternion_matrix
+from orchestrator.validation import format_error
+from orchestrator.case import Case, CaseError, Name, Strict, parse_case
+from orchestrator.results import Trajectory, read_results
+from orchestrator.runner import RESULTS
+from orchestrator.campaign import store
+from orchestrator.campaign.execute import perform
+from orchestrator.campaign.spec import ParameterPath, set_path
 
 HISTORY = "history.jsonl"
 
@@ -128,7 +129,7 @@ def load_calibration(path: Path, directory: Path) -> Calibration:
     try:
         spec = CalibrationSpec.model_validate(yaml.safe_load(path.read_text()))
     except ValidationError as error:
-        raise CaseError(f"{path}: {_format_error(error)}") from None
+        raise CaseError(f"{path}: {format_error(error)}") from None
     base_path = (path.parent / spec.base).resolve()
     base = yaml.safe_load(base_path.read_text())
     times, measured = read_measured((path.parent / spec.measured).resolve())
@@ -141,7 +142,7 @@ def evaluate_batch(calibration: Calibration, batch: list[np.ndarray], record: Ca
     import concurrent.futures as futures
     import multiprocessing
 
-    from ..engines.base import die_with_parent
+    from orchestrator.engines.base import die_with_parent
 
     cases = [calibration.case_for(values) for values in batch]
     todo = []
@@ -221,6 +222,12 @@ def calibrate(calibration: Calibration) -> dict[str, Any]:
             x0=to_unit(start),
             tol=spec.tolerance,
         )
+    return _finish(calibration, evaluations)
+
+
+def _finish(calibration: Calibration, evaluations: list[dict[str, Any]]) -> dict[str, Any]:
+    """The best evaluation, saved as calibration.json with its convergence plot."""
+    spec = calibration.spec
     best = min(evaluations, key=lambda e: e["error"])
     result = {
         "method": spec.method,

@@ -1,98 +1,100 @@
 """Running a campaign's pending runs on a local process pool or a Dask cluster, resumably.
 
-Each run is performed by `perform` in a worker process (or Dask worker): it marks the directory
-with its PID, runs the case, and returns a small summary. A crashed run is recorded (run.json with
-the log tail) and the campaign goes on. Workers and engines die with the campaign process
-(PR_SET_PDEATHSIG), so a killed campaign leaves no orphans writing into run directories; the next
-launch finds those runs `incomplete`, moves them to the attic and runs them again.
+Each run is performed by `perform` in a worker process (or Dask worker). It takes the run
+directory's lock first and gives the point up when another process holds it or has completed it,
+so two launches on one campaign directory never run a point twice. A crashed run is recorded
+(run.json with the log tail) and the campaign goes on. Workers and engines die with the campaign
+process (PR_SET_PDEATHSIG) and the lock dies with them, so the next launch finds those runs
+`incomplete`, moves what they left to the attic and runs them again.
 """
 
 from __future__ import annotations
 
 import concurrent.futures as futures
-import json
 import multiprocessing
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from ..case import Case, CaseError
-from ..engines.base import EngineError, die_with_parent
-from ..runner import RESULTS, RUN_RECORD, run_case, write_json_atomic
-from . import store
-from .spec import STUDY_KINDS, base_kind, expand, load_campaign
+from orchestrator import rundir
+from orchestrator.campaign import store
+from orchestrator.campaign.spec import base_kind, expand, load_campaign
+from orchestrator.case import Case, CaseError
+from orchestrator.engines.base import EngineError, die_with_parent
+from orchestrator.rundir import RUN_RECORD, write_json_atomic
+from orchestrator.runner import RESULTS, run_locked
+from orchestrator.studies.registry import study_kind
+
+RERUN = ("pending", "incomplete", "stale")  # what a launch runs; failed ones only when asked
 
 
-def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case") -> dict[str, Any]:
-    """Run one case, avalanche or collapse study in `directory` (any process); never raises for an engine or case failure."""
+def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case",
+            rerun_failed: bool = False) -> dict[str, Any]:
+    """Run one case or study point in `directory` (any process); never raises for an engine or case failure.
+
+    Returns {"run_id", "status": completed | failed | skipped, ...}; skipped: another process holds
+    the point or already completed it (or it failed before and rerun_failed is off).
+    """
     path = Path(directory)
-    path.mkdir(parents=True, exist_ok=True)
-    pid_file = path / store.WORKER_PID
-    pid_file.write_text(str(os.getpid()))
     started = time.perf_counter()
     try:
-        if kind in STUDY_KINDS:
-            record = perform_study(kind, point_json, path, started, timeout)
+        with rundir.locked(path, wait=False):
+            state = rundir.status(path, store.inputs_model(kind), held=True)
+            if state not in RERUN and not (state == "failed" and rerun_failed):
+                return {"run_id": path.name, "status": "skipped", "reason": state}
+            if any(entry.name != rundir.LOCK for entry in path.iterdir()):
+                rundir.retire(path, path.parent.parent)
+            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started)
+    except rundir.Busy:
+        return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
+
+
+def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float) -> dict[str, Any]:
+    try:
+        if kind == "case":
+            record = run_locked(Case.model_validate_json(point_json), case_dir, path, None, timeout)
         else:
-            case = Case.model_validate_json(point_json)
-            record = run_case(case, Path(case_dir), path, timeout=timeout)
+            record = perform_study(kind, point_json, path, started, timeout)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
         summary = error.summary if isinstance(error, EngineError) else str(error)
         if isinstance(error, CaseError) or kind != "case":
             tail = error.tail if isinstance(error, EngineError) else []
-            write_json_atomic(path / RUN_RECORD, {"status": "failed", "error": summary, "log_tail": tail})
+            write_json_atomic(path / RUN_RECORD, {"status": "failed", "kind": kind, "error": summary, "log_tail": tail})
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
-    finally:
-        pid_file.unlink(missing_ok=True)
 
 
-def perform_study(kind: str, study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
-    """An avalanche or collapse study as one campaign run, with a summary run.json.
+def perform_study(kind_name: str, study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
+    """A study as one campaign run, with a summary run.json (and the study as its case.json).
 
     The study's preparation (an avalanche's packing, a collapse's rained column) is shared by every
-    run of the campaign in <campaign>/packings or <campaign>/preparations. The summary points at the
-    release's results (run/results.h5) and holds the study's scalar metrics, so the index and the
-    plots treat it like any run.
+    run of the campaign in <campaign>/<kind.shared_dir>. The summary points at the release's results
+    (run/results.h5) and holds the study's scalar metrics, so the index and the plots treat it like
+    any run.
     """
-    shared_root = path.parent.parent
-    if kind == "avalanche":
-        from ..avalanche_study import AvalancheStudy, run_study
-
-        report = run_study(AvalancheStudy.model_validate_json(study_json), path, packings=shared_root / "packings", timeout=timeout)
-        shared, metrics = report["packing"], study_metrics(report)
-    else:
-        from ..collapse import CollapseStudy
-        from ..collapse_study import collapse_metrics, run_collapse
-
-        report = run_collapse(CollapseStudy.model_validate_json(study_json), path, preparations=shared_root / "preparations", timeout=timeout)
-        shared, metrics = report["preparation"], collapse_metrics(report)
-    release = json.loads((path / "run" / RUN_RECORD).read_text())
+    kind = study_kind(kind_name)
+    study = kind.model.model_validate_json(study_json)
+    build = rundir.build_stamp(study.engine.value)
+    rundir.save_inputs(path, study)
+    report = kind.run(study, path, shared=path.parent.parent / kind.shared_dir, timeout=timeout)
+    release = rundir.read_json(path / "run" / RUN_RECORD) or {}
+    shared = report[kind.preparation]
     record = {
         "status": "completed",
-        "kind": kind,
+        "kind": kind_name,
+        "run_id": rundir.run_id(study, build),
+        "build": build,
         "results": f"run/{RESULTS}",
         "engine": release.get("engine"),
         "engine_version": release.get("engine_version"),
-        "contact_build": release.get("contact_build"),
         "wall_time_s": time.perf_counter() - started,
         "preparation": shared.get("directory"),
         "preparation_reused": shared.get("reused"),
-        "metrics": metrics,
+        "metrics": kind.metrics(report),
     }
     write_json_atomic(path / RUN_RECORD, record)
     return record
-
-
-def study_metrics(report: dict[str, Any]) -> dict[str, float]:
-    """The scalar numbers of a study report, flat: deposit.*, front.*, packing density, energy left."""
-    metrics = {f"deposit.{k}": float(v) for k, v in report["deposit"].items() if isinstance(v, (int, float))}
-    metrics.update({f"front.{k}": float(v) for k, v in report["front"].items() if isinstance(v, (int, float))})
-    metrics["packing.apparent_density"] = float(report["packing"]["apparent_density"])
-    metrics["kinetic_to_released_energy"] = float(report["kinetic_to_released_energy"])
-    return metrics
 
 
 @dataclass
@@ -128,36 +130,34 @@ class Plan:
     kind: str
     to_run: list[str]
     skipped: dict[str, str]  # run id -> why (completed, running elsewhere, failed)
+    rerun_failed: bool = False
 
 
 def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
     spec, base = load_campaign(campaign_file)
     kind = base_kind(spec, base)
-    expanded = expand(spec, base)
     points, cases = {}, {}
-    for parameters, case in expanded:
-        identifier = store.run_id(case)
+    builds: dict[str, dict[str, Any]] = {}
+    for parameters, case in expand(spec, base):
+        engine = case.engine.value
+        identifier = rundir.run_id(case, builds.setdefault(engine, rundir.build_stamp(engine)))
         points[identifier] = parameters
         cases[identifier] = case
-    campaign_dir.mkdir(parents=True, exist_ok=True)
     store.write_points(campaign_dir, points)
     to_run, skipped = [], {}
     for identifier in points:
-        directory = store.run_dir(campaign_dir, identifier)
-        state = store.status(directory)
-        if state in ("completed", "running") or (state == "failed" and not rerun_failed):
+        state = store.status(store.run_dir(campaign_dir, identifier))
+        if state in RERUN or (state == "failed" and rerun_failed):
+            to_run.append(identifier)
+        else:
             skipped[identifier] = state
-            continue
-        if state in ("incomplete", "failed"):
-            store.retire(directory, campaign_dir)
-        to_run.append(identifier)
     base_dir = (campaign_file.parent / spec.base).resolve().parent
-    return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped)
+    return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
 
 
-def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str]:
+def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str, bool]:
     directory = str(store.run_dir(plan.campaign_dir, identifier))
-    return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind)
+    return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind, plan.rerun_failed)
 
 
 def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:
@@ -202,10 +202,13 @@ def run_campaign(
     for summary in results:
         if summary["status"] == "completed":
             counts.done += 1
+        elif summary["status"] == "skipped":  # another launch holds it or finished it meanwhile
+            counts.skipped += 1
         else:
             counts.failed += 1
-        counts.running = min(jobs, len(plan.to_run) - counts.done - counts.failed)
+        counts.running = min(jobs, counts.total - counts.skipped - counts.done - counts.failed)
         if on_update:
             on_update(counts, summary)
-    store.build_index(campaign_dir)
+    with store.campaign_lock(campaign_dir):
+        store.build_index(campaign_dir)
     return counts

@@ -22,7 +22,9 @@ import yaml
 from pydantic import Field, ValidationError, model_validator
 from scipy.stats import qmc
 
-from ..case import Case, CaseError, Name, Strict, _format_error, parse_case
+from orchestrator.case import Case, CaseError, Name, Strict, parse_case, parse_model, read_yaml
+from orchestrator.engines import Engine
+from orchestrator.studies.registry import detect, study_kind
 
 ParameterPath = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+))*$")]
 
@@ -70,60 +72,33 @@ class CampaignSpec(Strict):
     # file has `column`, `channel` or `grains`; an avalanche study when it has `packing`, `release`,
     # `geometry` or `brick`; either only without `bodies`.
     kind: Literal["auto", "case", "avalanche", "collapse"] = "auto"
-    engine: Literal["liggghts", "yade"] | None = None
+    engine: Engine | None = None
     designs: list[Design] = []
     replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
     derived: dict[ParameterPath, str] = {}
     timeout_s: Annotated[float, Field(gt=0)] | None = None
 
 
-STUDY_KEYS = {"packing", "release", "geometry", "brick"}
-COLLAPSE_KEYS = {"column", "channel", "grains", "bed"}
-STUDY_KINDS = ("avalanche", "collapse")  # kinds whose points are studies (defaults filled in before varying)
-
-
 def base_kind(spec: CampaignSpec, base: dict[str, Any]) -> str:
-    """`case`, `avalanche` or `collapse`: what each point of the campaign runs."""
-    if spec.kind != "auto":
-        return spec.kind
-    if not isinstance(base, dict) or "bodies" in base:
-        return "case"
-    if COLLAPSE_KEYS & set(base):
-        return "collapse"
-    return "avalanche" if STUDY_KEYS & set(base) else "case"
+    """`case`, or the study kind (studies.registry) each point of the campaign runs."""
+    return spec.kind if spec.kind != "auto" else detect(base)
 
 
 def validate_point(kind: str, data: dict[str, Any], source: str) -> Any:
-    """A validated case, avalanche study or collapse study, from a mapping."""
-    if kind == "collapse":
-        from ..collapse import parse_collapse
-
-        return parse_collapse(data, source=source)
-    if kind == "avalanche":
-        from ..avalanche_study import AvalancheStudy
-
-        try:
-            return AvalancheStudy.model_validate(data)
-        except ValidationError as error:
-            raise CaseError(f"{source}: {_format_error(error)}") from None
-    return parse_case(data, source=source)
+    """A validated case, or study of that kind, from a mapping."""
+    if kind == "case":
+        return parse_case(data, source=source)
+    return study_kind(kind).parse(data, source)
 
 
 def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
     """The campaign and its base case or study (as a mapping), both validated."""
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise CaseError(f"{path}: cannot read the campaign ({error})") from None
-    try:
-        spec = CampaignSpec.model_validate(data)
-    except ValidationError as error:
-        raise CaseError(f"{path}: {_format_error(error)}") from None
+    spec = parse_model(CampaignSpec, read_yaml(path, "campaign"), str(path))
     base_path = (path.parent / spec.base).resolve()
     try:
-        base = yaml.safe_load(base_path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise CaseError(f"{path}: base: cannot read {base_path} ({error})") from None
+        base = read_yaml(base_path, "base case")
+    except CaseError as error:
+        raise CaseError(f"{path}: base: {error}") from None
     validate_point(base_kind(spec, base), base, str(base_path))  # the base must be valid on its own
     return spec, base
 
@@ -218,7 +193,7 @@ def _dotted(node: ast.AST) -> str:
 def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
     """(varied parameters, validated case or study) for every point × replicate, in a stable order."""
     kind = base_kind(spec, base)
-    if kind in STUDY_KINDS:  # every field present (defaults filled in), so any study path can vary
+    if kind != "case":  # a study: every field present (defaults filled in), so any study path can vary
         base = validate_point(kind, base, spec.base).model_dump(mode="json")
     blocks = [design_points(design) for design in spec.designs] or [[{}]]
     points = [dict(itertools.chain.from_iterable(p.items() for p in combo)) for combo in itertools.product(*blocks)]
@@ -227,7 +202,7 @@ def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any
         for replicate in range(spec.replicates):
             data = copy.deepcopy(base)
             if spec.engine:
-                data["engine"] = spec.engine
+                data["engine"] = spec.engine.value
             parameters = dict(point)
             if spec.replicates > 1:
                 data["seed"] = int(base.get("seed", 12345)) + replicate

@@ -1,135 +1,106 @@
-"""Content-addressed run directories of a campaign, their status, and the campaign index.
+"""A campaign directory: its content-addressed runs, their status, and the campaign index.
 
-A run's id is the hash of its canonical (sorted, normalised) validated case, so the same case always
-lands in the same directory: relaunching skips it when complete, and a crash never duplicates it.
+Each point runs in runs/<run id> (rundir.run_id: the canonical case or study, the schedule and the
+engine build), so the same point always lands in the same directory: relaunching skips it when
+complete, and a template or plugin change gives new ids, so those points run again while the old
+runs are reported `stale`.
 """
 
 from __future__ import annotations
 
-import datetime as dt
-import hashlib
+import fcntl
 import json
 import os
-import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-import h5py
 import pandas as pd
 from pydantic import BaseModel
 
-from ..runner import RESULTS, RUN_RECORD
+from orchestrator import rundir
+from orchestrator.case import Case
+from orchestrator.rundir import RUN_RECORD, retire
+from orchestrator.studies.registry import study_kind
 
 RUNS = "runs"
-ATTIC = "attic"
 POINTS = "points.json"
 INDEX = "index.parquet"
-WORKER_PID = "worker.pid"
+CAMPAIGN_LOCK = ".campaign.lock"
+
+__all__ = ["RUNS", "POINTS", "INDEX", "run_id", "run_dir", "status", "retire", "write_points", "build_index", "campaign_lock"]
 
 
-def run_id(case: BaseModel) -> str:
-    """Hash of the canonical JSON of a validated case (or study): the same inputs, the same id."""
-    canonical = json.dumps(case.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(canonical.encode()).hexdigest()[:16]
+def run_id(point: BaseModel) -> str:
+    """The run id of a case or study point (rundir.run_id)."""
+    return rundir.run_id(point)
 
 
 def run_dir(campaign_dir: Path, identifier: str) -> Path:
     return campaign_dir / RUNS / identifier
 
 
-def _pid_alive(pid: int) -> bool:
-    """True for a live process; a zombie (killed, not yet reaped by init) counts as dead."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return True
-    return state not in ("Z", "X")
+def inputs_model(kind: str) -> type[BaseModel]:
+    return Case if kind == "case" else study_kind(kind).model
 
 
 def status(directory: Path) -> str:
-    """pending | completed | failed | running (a live worker holds it) | incomplete (its worker died)."""
-    record_path = directory / RUN_RECORD
-    if not record_path.exists():
-        return "incomplete" if directory.exists() and any(directory.iterdir()) else "pending"
+    """rundir.status of a campaign run, its inputs read as the kind its record names."""
+    record = rundir.read_json(directory / RUN_RECORD) or {}
+    kind = record.get("kind", "case")
     try:
-        record = json.loads(record_path.read_text())
-    except (OSError, json.JSONDecodeError):
+        model = inputs_model(str(kind))
+    except ValueError:
         return "incomplete"
-    # A study's record points at its release's results (run/results.h5); a case's lie beside it.
-    if record.get("status") == "completed" and _results_readable(directory / record.get("results", RESULTS)):
-        return "completed"
-    if record.get("status") == "failed":
-        return "failed"
-    pid_file = directory / WORKER_PID
-    if pid_file.exists():
+    return rundir.status(directory, model)
+
+
+@contextmanager
+def campaign_lock(campaign_dir: Path) -> Iterator[None]:
+    """Serialise the short read-modify-write steps of concurrent launches (points.json, the index)."""
+    campaign_dir.mkdir(parents=True, exist_ok=True)
+    with open(campaign_dir / CAMPAIGN_LOCK, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
         try:
-            if _pid_alive(int(pid_file.read_text())):
-                return "running"
-        except ValueError:
-            pass
-    return "incomplete"
-
-
-def _results_readable(path: Path) -> bool:
-    try:
-        with h5py.File(path, "r") as store:
-            return "frames/position" in store
-    except (OSError, KeyError):
-        return False
-
-
-def retire(directory: Path, campaign_dir: Path) -> Path:
-    """Move a dead or failed attempt aside (never delete what was computed) so it can be rerun."""
-    attic = campaign_dir / ATTIC
-    attic.mkdir(exist_ok=True)
-    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
-    target = attic / f"{directory.name}-{stamp}"
-    shutil.move(str(directory), target)
-    return target
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def write_points(campaign_dir: Path, points: dict[str, dict[str, Any]]) -> None:
+    """Add points (run id → varied parameters) to points.json; points already there are kept."""
     path = campaign_dir / POINTS
-    known = json.loads(path.read_text()) if path.exists() else {}
-    known.update(points)
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(known, indent=1, sort_keys=True))
-    os.replace(temporary, path)
+    with campaign_lock(campaign_dir):
+        known = rundir.read_json(path) or {}
+        known.update(points)
+        temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        temporary.write_text(json.dumps(known, indent=1, sort_keys=True))
+        os.replace(temporary, path)
 
 
 def build_index(campaign_dir: Path) -> pd.DataFrame:
     """One row per run: parameters, status, timings, versions and every scalar metric; saved as parquet."""
-    points_path = campaign_dir / POINTS
-    points = json.loads(points_path.read_text()) if points_path.exists() else {}
+    points = rundir.read_json(campaign_dir / POINTS) or {}
     rows = []
     for identifier, parameters in points.items():
         directory = run_dir(campaign_dir, identifier)
         row: dict[str, Any] = {"run_id": identifier, "status": status(directory)}
         row.update({f"param.{k}": v for k, v in parameters.items()})
-        record_path = directory / RUN_RECORD
-        if record_path.exists():
-            try:
-                record = json.loads(record_path.read_text())
-            except json.JSONDecodeError:
-                record = {}
+        record = rundir.read_json(directory / RUN_RECORD)
+        if record is not None:
             row.update(
                 wall_time_s=record.get("wall_time_s"),
                 engine=record.get("engine"),
                 engine_version=record.get("engine_version"),
-                contact_build=record.get("contact_build"),
+                build=json.dumps(record.get("build"), sort_keys=True) if record.get("build") else None,
                 error=record.get("error"),
             )
             row.update({f"metric.{k}": v for k, v in (record.get("metrics") or {}).items()})
         rows.append(row)
     table = pd.DataFrame(rows)
     if not table.empty:
-        temporary = campaign_dir / (INDEX + ".tmp")
+        temporary = campaign_dir / f"{INDEX}.{os.getpid()}.tmp"
         table.to_parquet(temporary, index=False)
         os.replace(temporary, campaign_dir / INDEX)
     return table

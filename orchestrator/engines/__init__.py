@@ -1,66 +1,28 @@
-"""Engine adapters by name."""
+"""The engines: a registry of what each can do, and one adapter per engine behind one protocol.
+
+Import adapters through `get_adapter(name)`; outside this package nothing names an engine.
+"""
 
 from __future__ import annotations
 
-import os
-from collections.abc import Iterator
-from contextlib import contextmanager
-
-from ..case import CaseError
-from .base import EngineAdapter, EngineError, EngineInfo
-from .cocd import CocdAdapter
-from .liggghts import LiggghtsAdapter
-from .yade import YadeAdapter
-
-ENGINE_NAMES = ("liggghts", "yade", "cocd")
-# MPI processes per LIGGGHTS run (`mpirun -np N`). An environment setting, not a case field: it
-# changes how fast a case runs, not what it computes, so cases (and packing keys) stay the same.
-MPI_ENV = "DEMORCH_LIGGGHTS_MPI"
-
-
-def liggghts_processes() -> int:
-    """N of DEMORCH_LIGGGHTS_MPI (default 1); a bad value is an error that names the variable."""
-    value = os.environ.get(MPI_ENV, "1").strip() or "1"
-    if not value.isdigit() or not 1 <= int(value) <= 256:
-        raise CaseError(f"{MPI_ENV}={value!r}: must be a whole number of MPI processes; allowed range: 1 to 256")
-    return int(value)
-
-
-GRID_ENV = "DEMORCH_LIGGGHTS_GRID"
-
-
-def liggghts_grid() -> str:
-    """The MPI processor grid of DEMORCH_LIGGGHTS_GRID ("Px Py Pz", each a count or *; default "* * *",
-    LIGGGHTS' own choice). A split across the flow ("1 * 1") balances a flow symmetric about y = 0."""
-    value = " ".join(os.environ.get(GRID_ENV, "* * *").split())
-    parts = value.split(" ")
-    if len(parts) != 3 or not all(p == "*" or (p.isdigit() and 1 <= int(p) <= 256) for p in parts):
-        raise CaseError(f"{GRID_ENV}={value!r}: must be three processor counts or * (e.g. '1 * 1'); allowed range: 1 to 256 each")
-    return value
-
-
-@contextmanager
-def default_grid(grid: str) -> Iterator[None]:
-    """Within: DEMORCH_LIGGGHTS_GRID is `grid` unless the user set it (a study that knows its
-    symmetry picks the split, the user's word wins)."""
-    if GRID_ENV in os.environ:
-        yield
-        return
-    os.environ[GRID_ENV] = grid
-    try:
-        yield
-    finally:
-        os.environ.pop(GRID_ENV, None)
+from orchestrator.engines.base import ContactBuildError, EngineAdapter, EngineError, EngineInfo
+from orchestrator.engines.registry import (
+    DEFAULT_ENGINE,
+    ENGINE_NAMES,
+    ENGINES,
+    Capabilities,
+    Engine,
+    UnknownEngine,
+    adapter_class,
+    capabilities,
+    engines_with,
+)
 
 
 def get_adapter(name: str) -> EngineAdapter:
-    if name == "liggghts":
-        return LiggghtsAdapter(mpi_processes=liggghts_processes(), processor_grid=liggghts_grid())
-    if name == "yade":
-        return YadeAdapter()
-    if name == "cocd":
-        return CocdAdapter()
-    raise ValueError(f"unknown engine {name!r}; allowed: {', '.join(ENGINE_NAMES)}")
+    """The adapter of engine `name`, set up from the environment (MPI processes, say)."""
+    return adapter_class(name).from_environment()
 
 
-__all__ = ["ENGINE_NAMES", "GRID_ENV", "default_grid", "MPI_ENV", "liggghts_grid", "liggghts_processes", "EngineAdapter", "EngineError", "EngineInfo", "get_adapter"]
+__all__ = ["ContactBuildError", "DEFAULT_ENGINE", "ENGINE_NAMES", "ENGINES", "Capabilities", "Engine", "EngineAdapter", "EngineError", "EngineInfo",
+           "UnknownEngine", "adapter_class", "capabilities", "engines_with", "get_adapter"]

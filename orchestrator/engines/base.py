@@ -15,8 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Protocol
 
-from ..case import Case
-from ..results import Trajectory
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from orchestrator.case import Case
+from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
 TAIL_LINES = 25
@@ -42,6 +45,10 @@ class EngineError(RuntimeError):
         super().__init__("\n".join(parts))
 
 
+class ContactBuildError(RuntimeError):
+    """A compiled contact law could not be built; the message holds the compiler's output tail."""
+
+
 @dataclass(frozen=True)
 class EngineInfo:
     name: str
@@ -53,15 +60,40 @@ class EngineInfo:
 class EngineAdapter(Protocol):
     name: str
 
+    @classmethod
+    def from_environment(cls) -> "EngineAdapter":
+        """The adapter with its settings from the environment (MPI processes, say)."""
+        ...
+
     def info(self) -> EngineInfo: ...
+
+    def build_inputs(self) -> dict[str, str]:
+        """Hashes of what turns a case into engine steps besides the engine itself: the deck templates
+        or runner program (`inputs`), a compiled plugin (`plugin`). Part of every run id."""
+        ...
 
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
         """Render the deck (and its data files) into rundir; return the deck path."""
         ...
 
-    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None: ...
+    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None: ...
 
-    def read_output(self, rundir: Path) -> Trajectory: ...
+    def read_output(self, case: Case, rundir: Path) -> Trajectory: ...
+
+
+class AdapterDefaults:
+    """What most adapters share: no settings from the environment, the templates as build inputs."""
+
+    name: str
+
+    @classmethod
+    def from_environment(cls) -> "AdapterDefaults":
+        return cls()
+
+    def build_inputs(self) -> dict[str, str]:
+        from orchestrator.engines.templating import template_hash
+
+        return {"inputs": template_hash(self.name)}
 
 
 def die_with_parent() -> None:
@@ -139,10 +171,15 @@ def run_engine(
         returncode = process.wait()
         if watchdog is not None:
             watchdog.cancel()
-    if timed_out.is_set():
-        failure = f"timed out after {timeout:.0f} s and was stopped"
+    _raise_on_failure(failure, timeout if timed_out.is_set() else None, returncode, command, deck, log_path, list(tail))
+    return list(tail)
+
+
+def _raise_on_failure(failure: str | None, timed_out_after: float | None, returncode: int, command: list[str], deck: Path,
+                      log_path: Path, tail: list[str]) -> None:
+    if timed_out_after is not None:
+        failure = f"timed out after {timed_out_after:.0f} s and was stopped"
     if failure is None and returncode != 0:
         failure = f"{Path(command[0]).name} exited with status {returncode}"
     if failure is not None:
-        raise EngineError(f"engine run failed: {failure}", deck, log_path, list(tail))
-    return list(tail)
+        raise EngineError(f"engine run failed: {failure}", deck, log_path, tail)

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import geometry, physics
-from ..case import Case, Domain
+from orchestrator import geometry, physics
+from orchestrator.case import Case, Domain
 
 
 @dataclass(frozen=True)
@@ -42,18 +42,6 @@ def pair_matrices(case: Case, pairs: list[physics.PairConstants]) -> dict[str, l
             for key in matrices:
                 matrices[key].append(float(getattr(pair, key)))
     return matrices
-
-
-CASE_COPY = "case.json"
-
-
-def save_case(case: Case, rundir: Path) -> None:
-    """Keep the validated case beside the deck: readers take masses, materials and the schedule from it."""
-    (rundir / CASE_COPY).write_text(case.model_dump_json(indent=2) + "\n")
-
-
-def saved_case(rundir: Path) -> Case:
-    return Case.model_validate_json((rundir / CASE_COPY).read_text())
 
 
 def body_materials(case: Case) -> np.ndarray:
@@ -106,3 +94,21 @@ def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
             moment = float(words[2]) * dt if words[1] == "step" else float(words[2])
             return {"stopped_at_rest": moment, "rest_speed": float(words[4])}
     return {}
+
+
+def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
+    """Read the (time, rows) pairs the script appended with numpy.save; a cut-off tail is dropped."""
+    times: list[float] = []
+    rows: list[np.ndarray] = []
+    if not path.exists():
+        return times, rows
+    with open(path, "rb") as stream:
+        while True:
+            try:
+                time = np.load(stream, allow_pickle=False)
+                state = np.load(stream, allow_pickle=False)
+            except (EOFError, ValueError, OSError):
+                break
+            times.append(float(time[0]))
+            rows.append(state)
+    return times, rows

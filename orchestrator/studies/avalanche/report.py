@@ -18,8 +18,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import meshio  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .front import flat_phases  # noqa: E402
-from .results import Trajectory  # noqa: E402
+from orchestrator.post.front import flat_phases  # noqa: E402
+from orchestrator.results import Trajectory  # noqa: E402
 
 # The 2012 study's front phases on the flat (reference.toml, random_pour_findings), for the plot.
 FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))

@@ -18,7 +18,7 @@ from typing import Any
 
 import jinja2
 
-TEMPLATE_ROOT = Path(os.environ.get("DEMORCH_TEMPLATES", Path(__file__).resolve().parent.parent / "templates"))
+TEMPLATE_ROOT = Path(os.environ.get("DEMORCH_TEMPLATES", Path(__file__).resolve().parents[2] / "templates"))
 
 _SAFE_DECK_WORD = re.compile(r"^[A-Za-z0-9_./+\- :]*$")  # no newline, $, #, &, quotes
 

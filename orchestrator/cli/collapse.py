@@ -11,14 +11,9 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from .case import CaseError
-from .engines import ENGINE_NAMES, EngineError
-
-
-def _cli() -> Any:
-    from . import cli  # the shared console, error exit and progress bar of the main CLI
-
-    return cli
+from orchestrator.case import CaseError
+from orchestrator.cli.common import console, fail, progress_callback
+from orchestrator.engines import ENGINE_NAMES, EngineError
 
 
 @click.group()
@@ -50,17 +45,17 @@ def collapse_table(title: str, report: dict[str, Any]) -> Table:
 
 def _stages(progress: Progress) -> Callable[[str], Callable[[float, float], None]]:
     def stage(name: str) -> Callable[[float, float], None]:
-        return _cli()._progress_callback(progress, progress.add_task("starting", total=1.0, stage=name))
+        return progress_callback(progress, progress.add_task("starting", total=1.0, stage=name))
 
     return stage
 
 
 def _progress() -> Progress:
-    return Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=_cli().console)
+    return Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console)
 
 
 def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
-    from .collapse_plots import plot_run
+    from orchestrator.studies.collapse.plots import plot_run
 
     arrays = dict(np.load(outdir / "profiles.npz"))
     return plot_run(report, arrays, outdir / "collapse.png")
@@ -73,10 +68,9 @@ def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
 @click.option("--preparations", type=click.Path(file_okay=False, path_type=Path), help="Where prepared columns are kept and reused.")
 def run_command(study_path: Path, engine: str | None, output: Path | None, preparations: Path | None) -> None:
     """Rain the column (or reuse it), release it down the channel, report the front and the bed."""
-    from .collapse import load_collapse, with_engine
-    from .collapse_study import run_collapse
+    from orchestrator.studies.collapse.spec import load_collapse, with_engine
+    from orchestrator.studies.collapse.study import run_collapse
 
-    cli = _cli()
     try:
         study = with_engine(load_collapse(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
@@ -84,11 +78,11 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
             report = run_collapse(study, outdir, progress=_stages(progress), preparations=preparations)
         figure = write_collapse_report(outdir, report)
     except CaseError as error:
-        cli._fail(str(error))
+        fail(str(error))
     except EngineError as error:
-        cli._fail(str(error), code=3)
-    cli.console.print(collapse_table(f"{study.name} on {study.engine.value}: α = {study.channel.slope_deg:g}°, h_i = {1000 * study.bed.erodible_thickness:g} mm", report))
-    cli.console.print(f"report: {outdir / 'report.json'}, figure: {figure}")
+        fail(str(error), code=3)
+    console.print(collapse_table(f"{study.name} on {study.engine.value}: α = {study.channel.slope_deg:g}°, h_i = {1000 * study.bed.erodible_thickness:g} mm", report))
+    console.print(f"report: {outdir / 'report.json'}, figure: {figure}")
 
 
 @collapse.command("calibrate")
@@ -100,18 +94,17 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
 @click.option("--check-engine", type=click.Choice(ENGINE_NAMES), help="Also run the calibrated μ on this engine and compare the runouts.")
 def calibrate_command(study_path: Path, engine: str | None, output: Path | None, mu_range: tuple[float, float], max_runs: int, check_engine: str | None) -> None:
     """Find μ that puts the horizontal-collapse runout on the quasi-2D law ΔL/L0 = 1.2 a (± 20 %)."""
-    from .collapse import load_collapse, with_engine
-    from .collapse_calibrate import calibrate_mu, with_mu
-    from .collapse_study import run_collapse
+    from orchestrator.studies.collapse.spec import load_collapse, with_engine
+    from orchestrator.studies.collapse.calibrate import calibrate_mu, with_mu
+    from orchestrator.studies.collapse.study import run_collapse
 
-    cli = _cli()
     try:
         study = with_engine(load_collapse(study_path), engine)
         if study.channel.slope_deg != 0.0:
             raise CaseError(f"channel.slope_deg: the scaling law is for a horizontal collapse; allowed: 0 (got {study.channel.slope_deg})")
         outdir = output or Path("runs") / f"calibration-{study.name}-{study.engine.value}"
         result = calibrate_mu(study, outdir, tuple(mu_range), max_runs=max_runs,
-                              on_run=lambda mu, ratio: cli.console.print(f"μ = {mu:.4f}: ΔL/L0 = {ratio:.3f}"))
+                              on_run=lambda mu, ratio: console.print(f"μ = {mu:.4f}: ΔL/L0 = {ratio:.3f}"))
         if check_engine and check_engine != study.engine.value:
             other = with_engine(with_mu(study, result["mu"]), check_engine)
             report = run_collapse(other, outdir / f"check-{check_engine}", preparations=outdir / "preparations")
@@ -119,17 +112,17 @@ def calibrate_command(study_path: Path, engine: str | None, output: Path | None,
             result["check"] = {"engine": check_engine, "runout_over_R0": ratio, "relative_difference": ratio / result["runout_over_R0"] - 1.0}
             (outdir / "calibration.json").write_text(json.dumps(result, indent=2) + "\n")
     except CaseError as error:
-        cli._fail(str(error))
+        fail(str(error))
     except EngineError as error:
-        cli._fail(str(error), code=3)
+        fail(str(error), code=3)
     band = result["band"]
     verdict = "in the band" if result["in_band"] else "OUTSIDE the band"
-    cli.console.print(f"[bold]μ = {result['mu']:.4f}[/] on {result['engine']}: ΔL/L0 = {result['runout_over_R0']:.3f}, "
+    console.print(f"[bold]μ = {result['mu']:.4f}[/] on {result['engine']}: ΔL/L0 = {result['runout_over_R0']:.3f}, "
                       f"law 1.2 a = {result['target_runout_over_R0']:.3f}, band [{band[0]:.3f}, {band[1]:.3f}]: {verdict}")
     if "check" in result:
         check = result["check"]
-        cli.console.print(f"same μ on {check['engine']}: ΔL/L0 = {check['runout_over_R0']:.3f} ({100 * check['relative_difference']:+.1f} %)")
-    cli.console.print(f"record: {outdir / 'calibration.json'}")
+        console.print(f"same μ on {check['engine']}: ΔL/L0 = {check['runout_over_R0']:.3f} ({100 * check['relative_difference']:+.1f} %)")
+    console.print(f"record: {outdir / 'calibration.json'}")
 
 
 @collapse.command("plot")
@@ -137,12 +130,12 @@ def calibrate_command(study_path: Path, engine: str | None, output: Path | None,
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Where the figures go (default CAMPAIGN_DIR).")
 def plot_command(campaign_dir: Path, output: Path | None) -> None:
     """Front position (r_f/R0) and velocity against time, one panel per slope, one curve per bed thickness."""
-    from .collapse_plots import plot_slope_bed
+    from orchestrator.studies.collapse.plots import plot_slope_bed
 
     reports = [json.loads(path.read_text()) for path in sorted(campaign_dir.glob("runs/*/report.json"))]
     if not reports:
-        _cli()._fail(f"{campaign_dir}: no finished collapse runs (runs/*/report.json)")
+        fail(f"{campaign_dir}: no finished collapse runs (runs/*/report.json)")
     target = output or campaign_dir
     target.mkdir(parents=True, exist_ok=True)
     for path in plot_slope_bed(reports, target):
-        _cli().console.print(f"figure: {path}")
+        console.print(f"figure: {path}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .results import Trajectory
+from orchestrator.results import Trajectory
 
 REST_SPEED = 1e-3  # m/s: a body slower than this counts as at rest
 

@@ -14,8 +14,8 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-from .collapse import CollapseStudy
-from .collapse_study import run_collapse
+from orchestrator.studies.collapse.spec import CollapseStudy
+from orchestrator.studies.collapse.study import run_collapse
 
 QUASI_2D_COEFFICIENT = 1.2
 BAND = 0.20

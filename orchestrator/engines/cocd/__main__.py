@@ -1,4 +1,4 @@
-"""Run a COCD deck: `python -m orchestrator.cocd deck.json` in the run directory.
+"""Run a COCD deck: `python -m orchestrator.engines.cocd deck.json` in the run directory.
 
 Writes frames.npy (the YADE adapter's frame stream: time, then an (N, 16) array per frame),
 cocd_stats.json (per step: contacts, solver iterations and seconds; the smallest gap seen), and
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .solver import Scene, Walls, smallest_gap, step
+from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
 
 
 def load_scene(deck: dict) -> Scene:

@@ -16,13 +16,12 @@ import time
 from pathlib import Path
 from typing import Callable
 
-SOURCE_DIR = Path(__file__).resolve().parent.parent / "custom_contact"
+SOURCE_DIR = Path(__file__).resolve().parents[3] / "custom_contact"
 SOURCES = ("normal_model_bilinear.h", "plugin.cpp", "build.sh")
 LIBRARY = "libdemorch_bilinear.so"
 
 
-class ContactBuildError(RuntimeError):
-    """The plugin could not be built; the message holds the compiler's output tail."""
+from orchestrator.engines.base import ContactBuildError
 
 
 def cache_root() -> Path:

@@ -9,8 +9,8 @@ rule cannot express is a case error, reported before YADE starts.
 
 from __future__ import annotations
 
-from ..case import Case, CaseError
-from ..physics import PairConstants
+from orchestrator.case import Case, CaseError
+from orchestrator.physics import PairConstants
 
 RELATIVE_TOLERANCE = 1e-9
 

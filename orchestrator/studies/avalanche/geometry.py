@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .bricks import BrickClump, quaternion_matrix
-from .packing import random_orientations
+from orchestrator.bricks import BrickClump, quaternion_matrix
+from orchestrator.studies.avalanche.packing import random_orientations
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""COCD adapter: a JSON deck, `python -m orchestrator.cocd`, the frame stream → Trajectory.
+"""COCD adapter: a JSON deck, `python -m orchestrator.engines.cocd`, the frame stream → Trajectory.
 
 COCD (orchestrator/cocd) runs in its own process like the other engines, so timeouts, logs,
 progress and failure handling are the same. It takes spheres (3D) or spheres in one plane (2D,
@@ -16,12 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import physics
-from ..case import Case, CaseError, RectangleWall
-from ..results import Trajectory
-from . import common
-from .base import EngineError, EngineInfo, ProgressCallback, run_engine
-from .yade import read_frames
+from orchestrator import physics
+from orchestrator.case import Case, CaseError, RectangleWall
+from orchestrator.results import Trajectory
+from orchestrator.engines import common
+from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, run_engine
 
 DECK_NAME = "cocd.json"
 FRAMES_NAME = "frames.npy"
@@ -37,7 +36,7 @@ def _progress(line: str) -> float | None:
     return None
 
 
-class CocdAdapter:
+class CocdAdapter(AdapterDefaults):
     name = "cocd"
 
     def info(self) -> EngineInfo:
@@ -48,10 +47,6 @@ class CocdAdapter:
         return EngineInfo(name="cocd", executable=sys.executable, version=version, install_hint=INSTALL_HINT)
 
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
-        if case.bodies.clumps:
-            raise CaseError("bodies.clumps: the cocd engine takes spheres only (clumps: use liggghts or yade)")
-        if case.initial_state:
-            raise CaseError("initial_state: LIGGGHTS only; cocd starts from the bodies as listed")
         walls = []
         for i, wall in enumerate(case.walls):
             if not isinstance(wall, RectangleWall):
@@ -59,7 +54,6 @@ class CocdAdapter:
             if abs(float(np.dot(wall.edge1, wall.edge2))) > 1e-9 * float(np.linalg.norm(wall.edge1) * np.linalg.norm(wall.edge2)):
                 raise CaseError(f"walls.{i}: the cocd engine needs a rectangle's edges at right angles")
         plan = physics.schedule(case)
-        common.save_case(case, rundir)
         materials = [m.name for m in case.materials]
         index = {name: k for k, name in enumerate(materials)}
         mu = np.zeros((len(materials), len(materials)))
@@ -97,22 +91,21 @@ class CocdAdapter:
         path.write_text(json.dumps(deck) + "\n")  # data only: the runner is fixed code
         return path
 
-    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
         deck = rundir / DECK_NAME
-        end_time = physics.schedule(common.saved_case(rundir)).end_time
-        command = [sys.executable, "-u", "-m", "orchestrator.cocd", DECK_NAME]
+        end_time = physics.schedule(case).end_time
+        command = [sys.executable, "-u", "-m", "orchestrator.engines.cocd", DECK_NAME]
         env = dict(os.environ)
-        env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2]) + (":" + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        env["PYTHONPATH"] = str(Path(__file__).resolve().parents[3]) + (":" + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         tail = run_engine(command, rundir, deck, _progress, end_time, progress, env=env, timeout=timeout,
                           failure_markers=("ERROR", "Traceback"))
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
             raise EngineError("cocd ended without finishing", deck, rundir / "engine.log", tail)
 
-    def read_output(self, rundir: Path) -> Trajectory:
-        times, rows = read_frames(rundir / FRAMES_NAME)
+    def read_output(self, case: Case, rundir: Path) -> Trajectory:
+        times, rows = common.read_frames(rundir / FRAMES_NAME)
         if not rows:
             raise EngineError("cocd wrote no frames", rundir / DECK_NAME, rundir / "engine.log")
-        case = common.saved_case(rundir)
         stack = np.stack(rows)
         return Trajectory(
             time=np.asarray(times),

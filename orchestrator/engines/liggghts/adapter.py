@@ -7,15 +7,18 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
-from .. import geometry, physics
-from ..bricks import quaternion_matrices
-from ..case import Case, CaseError, Domain
-from ..results import Trajectory
-from . import common
-from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
+from orchestrator import geometry, physics
+from orchestrator.bricks import quaternion_matrices
+from orchestrator.case import Case, CaseError, ContactLaw, Domain
+from orchestrator.results import Trajectory
+from orchestrator.engines import common, mpi
+from orchestrator.engines.liggghts import plugin
+from orchestrator.engines.liggghts.dump import clump_states, kabsch_quaternions, read_binary_dump, read_dump, sphere_states  # noqa: F401
+from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 
 DECK_NAME = "in.liggghts"
 DATA_NAME = "data.spheres"
@@ -210,13 +213,27 @@ class ThermoWatcher:
         return step * self.dt
 
 
-class LiggghtsAdapter:
+class LiggghtsAdapter(AdapterDefaults):
     name = "liggghts"
 
     def __init__(self, executable: str = "liggghts", mpi_processes: int = 1, processor_grid: str = "* * *"):
         self.executable = executable
         self.mpi_processes = mpi_processes
         self.processor_grid = processor_grid
+
+    @classmethod
+    def from_environment(cls) -> "LiggghtsAdapter":
+        return cls(mpi_processes=mpi.mpi_processes(), processor_grid=mpi.processor_grid())
+
+    def build_inputs(self) -> dict[str, str]:
+        return {**super().build_inputs(), "plugin": plugin.build_key()}
+
+    def law_plugin(self, force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
+        """The compiled bilinear law (capability `compiled_law`), built once and cached outside the clone."""
+        return plugin.ensure_plugin(force=force, progress=progress)
+
+    def law_plugin_status(self) -> dict[str, object]:
+        return plugin.plugin_status()
 
     def info(self) -> EngineInfo:
         return EngineInfo(
@@ -228,12 +245,9 @@ class LiggghtsAdapter:
 
     # -- input -----------------------------------------------------------------------------
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
-        from ..render import render
+        from orchestrator.engines.templating import render
 
-        if case.bodies.clumps and case.bodies.spheres:
-            raise CaseError("bodies: LIGGGHTS runs either spheres or clumps in one case, not both; use engine: yade for a mix")
         prepared = common.prepare(case, case_dir)
-        common.save_case(case, rundir)
         types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
         mesh_dir = rundir / "meshes"
         mesh_dir.mkdir(exist_ok=True)
@@ -327,17 +341,14 @@ class LiggghtsAdapter:
             return [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(self.mpi_processes), *base]
         return base
 
-    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
         deck = rundir / DECK_NAME
-        case = common.saved_case(rundir)
         plan = physics.schedule(case)
         dt, total = plan.dt, plan.total_steps
         watcher = ThermoWatcher(dt)
         env = dict(os.environ)
-        if "model bilinear" in deck.read_text():
-            from ..contact_build import ensure_plugin, liggghts_env
-
-            env.update(liggghts_env(ensure_plugin()))
+        if case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
+            env.update(plugin.liggghts_env(plugin.ensure_plugin()))
         tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout)
         if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
             lost = watcher.first_atoms - watcher.last_atoms
@@ -353,9 +364,8 @@ class LiggghtsAdapter:
             raise EngineError(f"the run stopped at step {watcher.last_step} of {total}", deck, rundir / "engine.log", tail)
 
     # -- output ----------------------------------------------------------------------------
-    def read_output(self, rundir: Path) -> Trajectory:
+    def read_output(self, case: Case, rundir: Path) -> Trajectory:
         deck = rundir / DECK_NAME
-        case = common.saved_case(rundir)
         dt = physics.schedule(case).dt
         if (rundir / DUMP_NAME).exists():
             columns = list(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
@@ -385,157 +395,3 @@ class LiggghtsAdapter:
             orientation=orientation,
             attrs={"orientation_tracked": "id_multisphere" in column, **common.at_rest_attrs(rundir, dt)},
         )
-
-
-def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(F, B, 3) position, velocity, spin of spheres by atom id; a lost atom is NaN from then on."""
-    position = np.full((len(frames), len(ids), 3), np.nan)
-    velocity, spin = position.copy(), position.copy()
-    index_of = {int(i): k for k, i in enumerate(ids)}
-    for f, rows in enumerate(frames):
-        slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
-        position[f, slots] = rows[:, column["x"] : column["z"] + 1]
-        velocity[f, slots] = rows[:, column["vx"] : column["vz"] + 1]
-        spin[f, slots] = rows[:, column["omegax"] : column["omegaz"] + 1]
-    return position, velocity, spin
-
-
-def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once.
-
-    Orientation: the rotation R that best maps the template's sphere centres onto the dumped ones
-    (Kabsch, by a batched SVD), as a (w, x, y, z) quaternion of the brick frame. Centre: the brick's
-    centre of mass, mean of the sphere centres − R × the template's mean (zero on a box; not on a
-    bevelled brick). Velocity: mean sphere velocity. Spin: the spheres carry their body's. Bodies are matched to the case's clumps by their
-    nearest requested position in the first frame (insertion places them within 1 mm).
-    """
-    from scipy.spatial import cKDTree
-
-    clumps = case.bodies.clumps
-    templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
-    template_means = np.array([t.mean(axis=0) for t in templates])
-    shape = (len(frames), len(clumps))
-    position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))
-    orientation = np.full(shape + (4,), np.nan)
-    requested = np.array([c.position for c in clumps])
-    xyz, vxyz, wxyz = (slice(column[a], column[a] + 3) for a in ("x", "vx", "omegax"))
-    body_column, id_column = column["id_multisphere"], column["id"]
-    slot_of = np.full(1, -1, dtype=np.int64)  # body id → clump slot (-1: not seen yet)
-    stacked: dict[int, np.ndarray] = {}  # sphere count → (clumps, spheres, 3) templates, by slot
-    for f, rows in enumerate(frames):
-        # `dump_modify sort id` and clumps inserted one at a time: usually sorted by body already.
-        keys = rows[:, body_column]
-        if not (np.all(np.diff(keys) >= 0) and np.all(np.diff(rows[:, id_column]) > 0)):
-            rows = rows[np.lexsort((rows[:, id_column], keys))]  # by body, then atom id = template order
-            keys = rows[:, body_column]
-        bodies_all = keys.astype(np.int64)
-        starts = np.flatnonzero(np.r_[True, np.diff(bodies_all) != 0])
-        counts = np.diff(np.r_[starts, len(rows)])
-        bodies = bodies_all[starts]
-        if bodies.max() >= len(slot_of):
-            slot_of = np.concatenate([slot_of, np.full(bodies.max() + 1 - len(slot_of), -1, dtype=np.int64)])
-        for size in np.unique(counts):  # bodies of one sphere count form one batch
-            chosen = counts == size
-            index = starts[chosen][:, None] + np.arange(size)[None, :]
-            group = rows[index]  # (bodies, spheres, columns)
-            centre = group[:, :, xyz].mean(axis=1)
-            ids = bodies[chosen]
-            new = slot_of[ids] < 0
-            if new.any():
-                _, nearest = cKDTree(requested).query(centre[new])
-                slot_of[ids[new]] = np.atleast_1d(nearest)
-            slots = slot_of[ids]
-            position[f, slots] = centre
-            velocity[f, slots] = group[:, :, vxyz].mean(axis=1)
-            spin[f, slots] = group[:, 0, wxyz]
-            if int(size) not in stacked:
-                stacked[int(size)] = np.stack([c - c.mean(axis=0) if len(c) == size else np.full((size, 3), np.nan) for c in templates])
-            quaternions = kabsch_quaternions(group[:, :, xyz] - centre[:, None, :], stacked[int(size)][slots])
-            orientation[f, slots] = quaternions
-            if np.any(template_means[slots]):
-                position[f, slots] = centre - np.einsum("bij,bj->bi", quaternion_matrices(quaternions), template_means[slots])
-    return position, velocity, spin, orientation
-
-
-def kabsch_quaternions(world: np.ndarray, template: np.ndarray) -> np.ndarray:
-    """(B, 4) quaternions (w, x, y, z; w ≥ 0) of the rotations R minimising Σ |world_i − R template_i|.
-
-    world, template: (B, n, 3), both centred. Kabsch: H = Σ template_i world_iᵀ = U S Vᵀ, then
-    R = V diag(1, 1, det(V Uᵀ)) Uᵀ (no reflection).
-    """
-    from scipy.spatial.transform import Rotation
-
-    h = np.einsum("bni,bnj->bij", template, world)
-    u, _, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(np.einsum("bji,bkj->bik", vt, u)))
-    correction = np.ones((len(h), 3))
-    correction[:, 2] = d
-    rotation = np.einsum("bji,bj,bkj->bik", vt, correction, u)
-    x, y, z, w = Rotation.from_matrix(rotation).as_quat().T
-    quaternion = np.stack([w, x, y, z], axis=1)
-    return np.where(quaternion[:, :1] < 0, -quaternion, quaternion)
-
-
-def read_dump(path: Path) -> tuple[list[int], list[str], list[np.ndarray]]:
-    """Parse a `dump custom` text file into (steps, column names, per-frame arrays); a cut-off last frame is dropped."""
-    if not path.exists():
-        return [], [], []
-    steps: list[int] = []
-    frames: list[np.ndarray] = []
-    columns: list[str] = []
-    for block in path.read_text().split("ITEM: TIMESTEP\n")[1:]:
-        parts = block.split("\n", 8)  # 8 header lines, then the rows
-        if len(parts) < 9:
-            break  # a frame cut short by a crash
-        step, count, names = int(parts[0]), int(parts[2]), parts[7].split()[2:]
-        if columns and names != columns:
-            raise ValueError(f"{path}: dump columns change between frames")
-        columns = names
-        data = np.fromstring(parts[8], sep=" ")  # C parsing of the whole block, 1.5 × str.split
-        if data.size != count * len(columns):
-            break  # incomplete last frame
-        steps.append(step)
-        frames.append(data.reshape(count, len(columns)))
-    return steps, columns, frames
-
-
-def read_binary_dump(path: Path, n_columns: int) -> tuple[list[int], list[np.ndarray]]:
-    """Parse a binary `dump custom` file into (steps, per-frame (atoms, columns) arrays).
-
-    Layout of each frame (LIGGGHTS 3.8, LAMMPS of its time): timestep and atom count (int64), the
-    triclinic flag and 6 boundary flags (int32), 6 box bounds (+3 tilts if triclinic; float64), the
-    values per atom and the number of chunks (int32), then per chunk its value count (int32) and
-    its values (float64). A frame cut short by a crash is dropped.
-    """
-    if not path.exists():
-        return [], []
-    raw = path.read_bytes()
-    steps: list[int] = []
-    frames: list[np.ndarray] = []
-    offset, end = 0, len(raw)
-    while offset + 60 <= end:
-        step, atoms = (int(v) for v in np.frombuffer(raw, np.int64, 2, offset))
-        triclinic = int(np.frombuffer(raw, np.int32, 1, offset + 16)[0])
-        offset += 16 + 4 + 24 + 48 + (24 if triclinic else 0)
-        if offset + 8 > end:
-            break
-        size_one, chunks = (int(v) for v in np.frombuffer(raw, np.int32, 2, offset))
-        offset += 8
-        if size_one != n_columns:
-            raise ValueError(f"{path}: {size_one} values per atom, expected {n_columns}")
-        parts = []
-        for _ in range(chunks):
-            if offset + 4 > end:
-                return steps, frames
-            count = int(np.frombuffer(raw, np.int32, 1, offset)[0])
-            offset += 4
-            if offset + 8 * count > end:
-                return steps, frames  # a frame cut short by a crash
-            parts.append(np.frombuffer(raw, np.float64, count, offset))
-            offset += 8 * count
-        data = np.concatenate(parts) if parts else np.empty(0)
-        if data.size != atoms * size_one:
-            break
-        steps.append(step)
-        frames.append(data.reshape(atoms, size_one))
-    return steps, frames

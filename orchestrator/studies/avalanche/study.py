@@ -19,18 +19,19 @@ import numpy as np
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
-from . import deposit, front
-from .avalanche import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
-from .bricks import BrickClump
-from .case import Case, CaseError, Engine, Name, Real, RestStop, Strict, _format_error, parse_case
-from .engines import EngineError, default_grid
-from .engines.liggghts import STATE_NAME as LIGGGHTS_STATE
-from .results import Trajectory, read_results
-from .reuse import case_key, ensure_run
-from .runner import RESULTS, run_case
+from orchestrator.post import deposit, front
+from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
+from orchestrator.bricks import BrickClump
+from orchestrator.validation import format_error
+from orchestrator.case import Case, CaseError, Name, Real, RestStop, Strict, parse_case
+from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.engines.mpi import default_grid
+from orchestrator.results import Trajectory, read_results
+from orchestrator.rundir import run_id, saved_case
+from orchestrator.studies.base import StageProgress, StudyKind
 
-SHARED_REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference" / "reference.toml"
-PACKAGED_REFERENCE = Path(__file__).resolve().parent / "data" / "reference.toml"  # a copy, for installs without shared/
+SHARED_REFERENCE = Path(__file__).resolve().parents[4] / "shared" / "reference" / "reference.toml"
+PACKAGED_REFERENCE = Path(__file__).resolve().parents[2] / "data" / "reference.toml"  # a copy, for installs without shared/
 
 
 def reference_path() -> Path:
@@ -112,7 +113,7 @@ class ReleaseSpec(Strict):
 
 class AvalancheStudy(Strict):
     name: Name
-    engine: Engine = Engine.liggghts
+    engine: Engine = Engine(DEFAULT_ENGINE)
     seed: int = Field(default=2009, ge=1, le=2**31 - 1)
     geometry: GeometrySpec = GeometrySpec()
     brick: BrickSpec = BrickSpec()
@@ -140,22 +141,6 @@ class AvalancheStudy(Strict):
         return brick_count(self.packing.volume, self.target_density, self.brick.build())
 
 
-def with_engine(study: AvalancheStudy, engine: str | None) -> AvalancheStudy:
-    """The study on another engine (`-e`); None keeps its own."""
-    return study if engine is None else study.model_copy(update={"engine": Engine(engine)})
-
-
-def load_study(path: Path) -> AvalancheStudy:
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise CaseError(f"{path}: cannot read the study ({error})") from None
-    try:
-        return AvalancheStudy.model_validate(data)
-    except ValidationError as error:
-        raise CaseError(f"{path}: {_format_error(error)}") from None
-
-
 def _contacts(spec: ContactSpec, brick_brick_mu: float | None = None) -> list[dict[str, Any]]:
     """Case contact pairs from a study's contact spec (brick/box takes the brick/board values)."""
     brick_brick = spec.brick_brick.model_dump()
@@ -176,7 +161,7 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
         # 3 mm between cells: LIGGGHTS places each clump within 1 mm of where it is asked to.
         positions, orientations = rain_positions(geometry, brick, count, study.seed, gap=0.003)
         return positions, orientations, max(geometry.box_height, rain_height(geometry, brick, count, gap=0.003))
-    gap = 0.0025 if study.engine is Engine.liggghts else 0.0005  # LIGGGHTS places within 1 mm
+    gap = 0.0005 + 2.0 * capabilities(study.engine).placement_tolerance  # clumps inserted off their centre
     positions, orientations = ordered_pile(geometry, brick, count, gap=gap, flip_seed=study.seed if study.packing.flips else None)
     rows, columns = pile_rows(geometry, brick, gap)
     height = max(geometry.box_height, (count // (rows * columns) + 1) * (brick.extent[2] + gap) + gap)
@@ -220,7 +205,7 @@ def packing_case(study: AvalancheStudy) -> Case:
     clumps = [{"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()} for p, q in zip(positions, orientations)]
     walls = study.geometry.build().walls(trap_closed=True, wall_height=height)
     return _case(study, "packing", study.packing.settle_time, study.release.output_interval, study.packing.stop_at_rest,
-                 _contacts(study.packing.contacts or study.contacts, study.packing.brick_brick_mu), clumps, walls, save_state=study.engine is Engine.liggghts)
+                 _contacts(study.packing.contacts or study.contacts, study.packing.brick_brick_mu), clumps, walls, save_state=capabilities(study.engine).restart)
 
 
 def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | None) -> Case:
@@ -249,76 +234,82 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
 
 
 def packing_key(study: AvalancheStudy) -> str:
-    """Content address of the packing of `study` (see case_key)."""
-    return case_key(packing_case(study))
-
-
-def ensure_packing(
-    study: AvalancheStudy, root: Path, progress: Callable[[float, float], None] | None = None, timeout: float | None = None
-) -> tuple[Path, bool]:
-    """The settled packing of `study` under root/<key>/, run once and then reused. Returns (directory, reused)."""
-    return ensure_run(packing_case(study), root, "packing", lambda directory: packing_state_file(study, directory), progress, timeout)
+    """Content address of the packing of `study` (its run id)."""
+    return run_id(packing_case(study))
 
 
 def packing_state_file(study: AvalancheStudy, packing_dir: Path) -> Path | None:
-    """The state file a release starts from: LIGGGHTS' restart; None for YADE (exact placement)."""
-    return packing_dir / LIGGGHTS_STATE if study.engine is Engine.liggghts else None
+    """The state file a release starts from (an engine with `restart`); None: the release rebuilds each
+    clump exactly where the packing left it (its contacts start afresh at the opening)."""
+    name = capabilities(study.engine).state_file
+    return packing_dir / name if name is not None else None
+
+
+class AvalancheKind(StudyKind):
+    """Bricks packed in the release box (the preparation), released down the slope, deposit and front measured."""
+
+    name = "avalanche"
+    model = AvalancheStudy
+    detect_keys = frozenset({"packing", "release", "geometry", "brick"})
+    preparation = "packing"
+    shared_dir = "packings"
+    lost_bodies = "some bricks left the box while settling; check the study geometry"
+    # Under MPI, split the box across the flow (y): the set-up is symmetric about y = 0, so each process
+    # gets half the bricks all along (measured: 1.74 × faster on 2 processes, against 1.13 × with the
+    # default split along the boards, which left one process with the whole pile).
+    processor_grid = "1 * 1"
+
+    def preparation_case(self, study: AvalancheStudy) -> Case:
+        return packing_case(study)
+
+    def state_file(self, study: AvalancheStudy, directory: Path) -> Path | None:
+        return packing_state_file(study, directory)
+
+    def release_case(self, study: AvalancheStudy, prepared: Case, packed: Trajectory, state: Path | None) -> Case:
+        return release_case(study, packed, state)
+
+    def measure(self, study: AvalancheStudy, trajectory: Trajectory, release_dir: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        brick = study.brick.build()
+        report = measure(trajectory, brick, gravity=-saved_case(release_dir).gravity[2])
+        density = apparent_density(study.geometry.build(), trajectory.position[0], trajectory.orientation[0], brick)
+        report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density}
+        return report, {}
+
+    def metrics(self, report: dict[str, Any]) -> dict[str, float]:
+        """deposit.*, front.*, packing density and the kinetic energy left, flat."""
+        metrics = {f"deposit.{k}": float(v) for k, v in report["deposit"].items() if isinstance(v, (int, float))}
+        metrics.update({f"front.{k}": float(v) for k, v in report["front"].items() if isinstance(v, (int, float))})
+        metrics["packing.apparent_density"] = float(report["packing"]["apparent_density"])
+        metrics["kinetic_to_released_energy"] = float(report["kinetic_to_released_energy"])
+        return metrics
+
+
+KIND = AvalancheKind()
+
+
+def load_study(path: Path) -> AvalancheStudy:
+    return KIND.load(path)
 
 
 def run_study(
     study: AvalancheStudy,
     outdir: Path,
-    progress: Callable[[str], Callable[[float, float], None] | None] | None = None,
+    progress: StageProgress | None = None,
     packings: Path | None = None,
     timeout: float | None = None,
 ) -> dict[str, Any]:
     """Pack (or reuse the packing from `packings`, default outdir/../packings), release, measure.
 
     A finished release in outdir/run is reused (rerun = report only). Returns the report, also
-    written to outdir/report.json.
+    written to outdir/report.json (studies.base.run_study).
     """
-    # Under MPI, LIGGGHTS splits the box across the flow (y): the set-up is symmetric about y = 0,
-    # so each process gets half the bricks all along; the default split (along the boards) left one
-    # process with the whole pile (measured: 1.74 × faster on 2 processes, against 1.13 ×).
-    with default_grid("1 * 1"):
-        return _run_study(study, outdir, progress, packings, timeout)
+    return KIND.run(study, outdir, progress, packings, timeout)
 
 
-def _run_study(
-    study: AvalancheStudy,
-    outdir: Path,
-    progress: Callable[[str], Callable[[float, float], None] | None] | None,
-    packings: Path | None,
-    timeout: float | None,
-) -> dict[str, Any]:
-    outdir.mkdir(parents=True, exist_ok=True)
-    geometry, brick = study.geometry.build(), study.brick.build()
-    rundir = outdir / "run"
-    packing_record = outdir / "packing.json"
-    finished_before = (rundir / RESULTS).exists()
-    if not finished_before:
-        root = packings if packings is not None else outdir.resolve().parent / "packings"
-        packing_dir, reused = ensure_packing(study, root, progress("packing") if progress else None, timeout)
-        packed = read_results(packing_dir / RESULTS)
-        if not np.isfinite(packed.position[-1]).all():
-            raise CaseError(f"packing {packing_dir}: some bricks left the box while settling; check the study geometry")
-        state = packing_state_file(study, packing_dir)
-        packing_record.write_text(json.dumps({"directory": str(packing_dir), "reused": reused}, indent=2) + "\n")
-        run_case(release_case(study, packed, state), outdir, rundir, progress=progress("release") if progress else None, timeout=timeout)
-    trajectory = read_results(rundir / RESULTS)
-    density = apparent_density(geometry, trajectory.position[0], trajectory.orientation[0], brick)
-    report = measure(trajectory, brick)
-    packing_info = json.loads(packing_record.read_text()) if packing_record.exists() else {}
-    report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density, **packing_info}
-    report["study"] = study.model_dump(mode="json")
-    # Tells a rerun's reader that nothing ran now (the packing record is the first run's).
-    report["finished_before"] = finished_before
-    (outdir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    return report
+def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0, gravity: float = 9.81) -> dict[str, Any]:
+    """Deposit metrics on the last frame and the front curve from `first_frame` (the trap opening) on.
 
-
-def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0) -> dict[str, Any]:
-    """Deposit metrics on the last frame and the front curve from `first_frame` (the trap opening) on."""
+    gravity: m/s², the downward (−z) component of the case's gravity, for the released energy."""
     metrics = deposit.deposit_metrics(trajectory.position[first_frame], trajectory.position[-1], trajectory.mass, trajectory.radius)
     # At least 1 % of the mass and at least three bricks must stand at the front.
     share = max(0.01, 3.0 / trajectory.n_bodies)
@@ -336,15 +327,17 @@ def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0) -> 
             "final_position": float(position[-1]),
             "flat_phases": front.flat_phases(position, velocity),
         },
-        "kinetic_to_released_energy": released_ratio(trajectory, first_frame),
+        "kinetic_to_released_energy": released_ratio(trajectory, first_frame, gravity),
     }
 
 
-def released_ratio(trajectory: Trajectory, first_frame: int) -> float:
-    """Kinetic energy at the end over the potential energy released since `first_frame`: ~0 when stopped."""
-    from .metrics import kinetic_energy
+def released_ratio(trajectory: Trajectory, first_frame: int, gravity: float = 9.81) -> float:
+    """Kinetic energy at the end over the potential energy released since `first_frame`: ~0 when stopped.
 
-    released = 9.81 * float(np.nansum(trajectory.mass * (trajectory.position[first_frame, :, 2] - trajectory.position[-1, :, 2])))
+    gravity: m/s², the downward (−z) component of the case's gravity."""
+    from orchestrator.post.summary import kinetic_energy
+
+    released = gravity * float(np.nansum(trajectory.mass * (trajectory.position[first_frame, :, 2] - trajectory.position[-1, :, 2])))
     return float(kinetic_energy(trajectory)[-1] / released) if released > 0 else float("nan")
 
 

@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import physics
-from ..bricks import world_sphere_centres
-from ..case import Case, CaseError, ContactLaw, Sphere
-from ..results import Trajectory
-from . import common
-from .base import EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
-from .yade_materials import yade_materials
+from orchestrator import physics
+from orchestrator.bricks import world_sphere_centres
+from orchestrator.case import Case, CaseError, ContactLaw, Sphere
+from orchestrator.results import Trajectory
+from orchestrator.engines import common
+from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
+from orchestrator.engines.yade.materials import yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
@@ -41,7 +41,7 @@ def _blocked_dofs(sphere: Sphere, planar: bool) -> str:
     return blocked
 
 
-class YadeAdapter:
+class YadeAdapter(AdapterDefaults):
     name = "yade"
 
     def __init__(self, executable: str = "yade", threads: int = 1):
@@ -61,17 +61,11 @@ class YadeAdapter:
         return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
 
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
-        from ..render import render
+        from orchestrator.engines.templating import render
 
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
-        if case.initial_state:
-            raise CaseError(
-                "initial_state: LIGGGHTS only; YADE places clumps exactly, so give the saved positions, "
-                "orientations and velocities in `bodies` instead"
-            )
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
-        common.save_case(case, rundir)
         facets = [
             (wall.name, wall.material, *[tuple(float(c) for c in vertex) for vertex in triangle])
             for wall, triangles in zip(case.walls, prepared.wall_triangles)
@@ -112,10 +106,10 @@ class YadeAdapter:
         script.write_text(render("yade", "case.py.j2", context))
         return script
 
-    def execute(self, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
         script = rundir / SCRIPT_NAME
         executable = require_executable(self.executable, INSTALL_HINT)
-        end_time = physics.schedule(common.saved_case(rundir)).end_time
+        end_time = physics.schedule(case).end_time
         command = [executable, f"-j{self.threads}", "-x", "-n", SCRIPT_NAME]
         tail = run_engine(
             command, rundir, script, _progress, end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback")
@@ -123,14 +117,13 @@ class YadeAdapter:
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
             raise EngineError("YADE ended without finishing the script", script, rundir / "engine.log", tail)
 
-    def read_output(self, rundir: Path) -> Trajectory:
-        times, rows = read_frames(rundir / FRAMES_NAME)
+    def read_output(self, case: Case, rundir: Path) -> Trajectory:
+        times, rows = common.read_frames(rundir / FRAMES_NAME)
         script = rundir / SCRIPT_NAME
         if not rows:
             raise EngineError("YADE wrote no frames", script, rundir / "engine.log")
         first = rows[0]
         stack = np.stack(rows)
-        case = common.saved_case(rundir)  # parsed once: materials, inertia and the step all come from it
         return Trajectory(
             time=np.asarray(times),
             ids=first[:, 0].astype(np.int64),
@@ -149,21 +142,3 @@ class YadeAdapter:
 def _removals(case: Case, plan: physics.Schedule) -> list[tuple[int, list[str]]]:
     steps = physics.removal_steps(case, plan)
     return [(step, sorted(n for n, at in steps.items() if at == step)) for step in sorted(set(steps.values()))]
-
-
-def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
-    """Read the (time, rows) pairs the script appended with numpy.save; a cut-off tail is dropped."""
-    times: list[float] = []
-    rows: list[np.ndarray] = []
-    if not path.exists():
-        return times, rows
-    with open(path, "rb") as stream:
-        while True:
-            try:
-                time = np.load(stream, allow_pickle=False)
-                state = np.load(stream, allow_pickle=False)
-            except (EOFError, ValueError, OSError):
-                break
-            times.append(float(time[0]))
-            rows.append(state)
-    return times, rows

@@ -1,64 +1,71 @@
-"""Run a collapse study (prepare once, release, measure) and write its report.
+"""The collapse study kind: a column rained once behind its gate, released, its front and bed measured.
 
-The preparation is content-addressed (`reuse.ensure_run`) and kept under a preparations directory
-(default: beside the study's directory), so a campaign over slopes, frictions or durations of the
-same column rains it once. The release's results stay in outdir/run; the report (report.json,
-profiles.npz, plots) in outdir.
+The skeleton (studies.base) keeps the preparation under a preparations directory (default: beside
+the study's directory), so a campaign over slopes, frictions or durations of the same column rains
+it once. The release's results stay in outdir/run; the report (report.json, profiles.npz) in outdir.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-from . import collapse_metrics as cm
-from .case import CaseError
-from .collapse import CollapseStudy, preparation_case, release_case
-from .engines.common import saved_case
-from .results import Trajectory, read_results
-from .reuse import ensure_run
-from .runner import RESULTS, run_case
+from orchestrator.case import Case
+from orchestrator.post import collapse as cm
+from orchestrator.results import Trajectory
+from orchestrator.rundir import saved_case
+from orchestrator.studies.base import StageProgress, StudyKind
+from orchestrator.studies.collapse.spec import CollapseStudy, preparation_case, release_case
 
-REPORT = "report.json"
-PROFILES = "profiles.npz"
+
+class CollapseKind(StudyKind):
+    """A column rained behind its gate (the preparation), released down the channel, front and bed measured."""
+
+    name = "collapse"
+    model = CollapseStudy
+    detect_keys = frozenset({"column", "channel", "grains", "bed"})
+    preparation = "preparation"
+    shared_dir = "preparations"
+    lost_bodies = "some grains left the channel while settling"
+    arrays_file = "profiles.npz"
+
+    def preparation_case(self, study: CollapseStudy) -> Case:
+        return preparation_case(study)
+
+    def release_case(self, study: CollapseStudy, prepared: Case, packed: Trajectory, state: Path | None) -> Case:
+        return release_case(study, prepared, packed)
+
+    def measure(self, study: CollapseStudy, trajectory: Trajectory, release_dir: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        case = saved_case(release_dir)
+        glued = np.array([sphere.fixed for sphere in case.bodies.spheres])
+        return measure(study, trajectory, glued, g_normal=-case.gravity[2])
+
+    def metrics(self, report: dict[str, Any]) -> dict[str, float]:
+        return collapse_metrics(report)
+
+
+KIND = CollapseKind()
 
 
 def run_collapse(
     study: CollapseStudy,
     outdir: Path,
-    progress: Callable[[str], Callable[[float, float], None] | None] | None = None,
+    progress: StageProgress | None = None,
     preparations: Path | None = None,
     timeout: float | None = None,
 ) -> dict[str, Any]:
-    """Prepare (or reuse the preparation), release, measure. A finished release is reused."""
-    outdir.mkdir(parents=True, exist_ok=True)
-    rundir = outdir / "run"
-    record = outdir / "preparation.json"
-    if not (rundir / RESULTS).exists():
-        root = preparations if preparations is not None else outdir.resolve().parent / "preparations"
-        prepared_case = preparation_case(study)
-        directory, reused = ensure_run(prepared_case, root, "preparation", progress=progress("preparation") if progress else None, timeout=timeout)
-        packed = read_results(directory / RESULTS)
-        if not np.isfinite(packed.position[-1]).all():
-            raise CaseError(f"preparation {directory}: some grains left the channel while settling")
-        record.write_text(json.dumps({"directory": str(directory), "reused": reused}, indent=2) + "\n")
-        run_case(release_case(study, prepared_case, packed), outdir, rundir, progress=progress("release") if progress else None, timeout=timeout)
-    trajectory = read_results(rundir / RESULTS)
-    glued = np.array([sphere.fixed for sphere in saved_case(rundir).bodies.spheres])
-    report, arrays = measure(study, trajectory, glued)
-    report["preparation"] = json.loads(record.read_text()) if record.exists() else {}
-    report["study"] = study.model_dump(mode="json")
-    np.savez_compressed(outdir / PROFILES, **arrays)
-    (outdir / REPORT).write_text(json.dumps(report, indent=2) + "\n")
-    return report
+    """Prepare (or reuse the preparation in `preparations`), release, measure (studies.base.run_study).
+    A finished release is reused."""
+    return KIND.run(study, outdir, progress, preparations, timeout)
 
 
-def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """The report (scalars and curves) and the arrays too big for JSON (h(x, t)); `glued` marks the rough bed."""
+def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray, g_normal: float | None = None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The report (scalars and curves) and the arrays too big for JSON (h(x, t)); `glued` marks the rough bed.
+
+    g_normal: m/s², gravity normal to the bed (the case's −g_z); default 9.81 cos α."""
     planar = study.dimension == 2
     position, velocity = trajectory.position, trajectory.velocity
     radii = trajectory.radius
@@ -77,7 +84,8 @@ def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray) -> 
     front = cm.front_positions(thickness, grid)
     speed = cm.front_velocity(times, front)
     phases = cm.front_phases(times, speed, front)
-    g_normal = 9.81 * math.cos(math.radians(study.channel.slope_deg))
+    if g_normal is None:
+        g_normal = 9.81 * math.cos(math.radians(study.channel.slope_deg))
     energy = [cm.bed_energy_ratio(frame[:, 2], v, masses, bed, g_normal) for frame, v in zip(position, velocity)]
     entrained = [cm.entrained_mass(frame, start, masses, bed, study.grains.diameter) for frame in position]
     probes = {f"{at:g}": [cm.static_flowing_interface(frame[:, 2], v[:, 0], frame[:, 0], radii, at, study.grains.diameter)

@@ -29,8 +29,10 @@ import yaml
 from pydantic import Field, ValidationError, model_validator
 from scipy.spatial import cKDTree
 
-from .case import Case, CaseError, CocdSettings, Engine, Name, Real, Strict, _format_error, parse_case
-from .results import Trajectory
+from orchestrator.case import Case, CaseError, Name, Real, Strict, parse_case, parse_model, read_yaml
+from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.engines.settings import StudyEngineSections
+from orchestrator.results import Trajectory
 
 GRAIN, WALL = "grain", "wall"  # one grain material: the rough bed's grains are glued grains (`fixed`)
 # Solid fraction of a frictionless rain, used only to size the rain (the column is levelled after):
@@ -93,11 +95,11 @@ class CollapseRelease(Strict):
     output_interval: Real(gt=0.0, le=10.0) = 0.01
 
 
-class CollapseStudy(Strict):
+class CollapseStudy(StudyEngineSections, Strict):
     """One collapse: the column, channel, grains, bed, contacts, preparation and release."""
 
     name: Name = "collapse"
-    engine: Engine = Engine.liggghts
+    engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 2022
     # 3: a channel between side walls (the quasi-2D set-up of the scaling law and of the study's
     # reduced 3D runs). 2: grains in one plane, ≈ 5 × cheaper; its runout hardly depends on μ
@@ -113,9 +115,7 @@ class CollapseStudy(Strict):
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
     # default runout by less than the grain size (see the README).
     time_safety_factor: Real(gt=0.0, le=0.5) = 0.05
-    # engine: cocd only (it has no contact stiffness: its step is `cocd_step`, its solver here)
-    cocd: CocdSettings = CocdSettings()
-    cocd_step: Real(gt=0.0, le=0.01) = 1e-3
+    # The sections one engine reads (its solver, the step of an implicit engine) come from StudyEngineSections.
 
     @model_validator(mode="after")
     def _fits(self) -> "CollapseStudy":
@@ -142,22 +142,11 @@ class CollapseStudy(Strict):
 
 
 def load_collapse(path: Path) -> CollapseStudy:
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
-        raise CaseError(f"{path}: cannot read the collapse study: {error}") from None
-    return parse_collapse(data or {}, source=str(path))
+    return parse_collapse(read_yaml(path, "collapse study"), source=str(path))
 
 
-def parse_collapse(data: dict[str, Any], source: str = "study") -> CollapseStudy:
-    try:
-        return CollapseStudy.model_validate(data)
-    except ValidationError as error:
-        raise CaseError(f"{source}: {_format_error(error)}") from None
-
-
-def with_engine(study: CollapseStudy, engine: str | None) -> CollapseStudy:
-    return study if engine is None else study.model_copy(update={"engine": Engine(engine)})
+def parse_collapse(data: object, source: str = "study") -> CollapseStudy:
+    return parse_model(CollapseStudy, data if data is not None else {}, source)
 
 
 # -- grains ---------------------------------------------------------------------------------------
@@ -313,8 +302,8 @@ def _case(study: CollapseStudy, name: str, duration: float, gravity: list[float]
             "engine": study.engine.value,
             "seed": study.seed,
             "time": {"duration": duration, "output_interval": min(study.release.output_interval, duration),
-                     **({"step": study.cocd_step} if study.engine is Engine.cocd else {"safety_factor": study.time_safety_factor})},
-            "cocd": study.cocd.model_dump(),
+                     **({"step": study.implicit_step()} if capabilities(study.engine).implicit else {"safety_factor": study.time_safety_factor})},
+            **study.engine_sections(),
             "gravity": gravity,
             "materials": [{"name": GRAIN, "density": study.grains.density}, {"name": WALL, "density": 2500.0}],
             "contacts": contacts,

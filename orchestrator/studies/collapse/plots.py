@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.ndimage import uniform_filter1d  # noqa: E402
 
-from .collapse_metrics import FRONT_WINDOW  # noqa: E402
+from orchestrator.post.collapse import FRONT_WINDOW  # noqa: E402
 
 
 def _mark_phases(axis: Any, front: dict[str, Any], key: str) -> None:

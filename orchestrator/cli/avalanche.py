@@ -1,0 +1,93 @@
+"""`demorch avalanche` and `demorch demo`: a brick avalanche study, its report and its table."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable
+
+import click
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from orchestrator.case import CaseError, with_engine
+from orchestrator.cli.common import REPO_ROOT, console, fail, progress_callback
+from orchestrator.engines import ENGINE_NAMES, EngineError
+from orchestrator.results import read_results
+from orchestrator.runner import RESULTS
+
+DEMO_STUDY = REPO_ROOT / "cases" / "avalanche" / "small.yaml"
+
+
+def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -> Path:
+    """Plots, snapshots, VTK and index.html for a study directory; returns the page."""
+    from orchestrator.studies.avalanche import report as pictures
+    from orchestrator.studies.avalanche.study import load_reference
+
+    trajectory = read_results(outdir / "run" / RESULTS)
+    figures = outdir / "report"
+    figures.mkdir(exist_ok=True)
+    pictures.plot_deposit(trajectory, figures / "deposit.png", slope_deg)
+    pictures.plot_front(report, figures / "front.png")
+    snapshots = pictures.plot_snapshots(trajectory, figures, slope_deg=slope_deg)
+    pictures.export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
+    rows = pictures.comparison_rows(report, load_reference())
+    return pictures.write_html(figures, outdir.name, rows, [figures / "deposit.png", figures / "front.png", *snapshots])
+
+
+def study_table(title: str, report: dict[str, Any]) -> Table:
+    from orchestrator.studies.avalanche.study import load_reference
+    from orchestrator.studies.avalanche.report import comparison_rows
+
+    table = Table(title=title, header_style="bold")
+    for column in ("metric", "value", "reference", "check"):
+        table.add_column(column, justify="right" if column == "value" else "left")
+    for name, value, reference, verdict in comparison_rows(report, load_reference()):
+        table.add_row(name, f"{value:.4g}", reference, verdict)
+    return table
+
+
+@click.command()
+@click.argument("study_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
+@click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where settled packings are kept and reused (default: beside the study directory, in packings/).")
+def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None) -> None:
+    """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references."""
+    from orchestrator.studies.avalanche.study import load_study, run_study
+
+    try:
+        study = with_engine(load_study(study_path), engine)
+        outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        console.print(f"[bold]{study.name}[/]: {study.brick_count} bricks, {study.packing.kind}, engine {study.engine.value} → {outdir}")
+        with Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:
+
+            def stage(name: str) -> Callable[[float, float], None]:
+                task = progress.add_task("starting", total=1.0, stage=name)
+                return progress_callback(progress, task)
+
+            report = run_study(study, outdir, progress=stage, packings=packings)
+    except CaseError as error:
+        fail(str(error))
+    except EngineError as error:
+        fail(str(error), code=3)
+    packing = report.get("packing", {})
+    if report.get("finished_before"):
+        console.print(f"already complete in {outdir / 'run'} (delete that directory to run it again); measured again")
+    if packing.get("directory"):
+        console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
+    try:
+        page = write_study_report(outdir, report, study.geometry.slope_deg)
+        console.print(study_table(f"{study.name} on {study.engine.value}", report))
+    except CaseError as error:
+        fail(f"{error} (the run itself is complete: {outdir / 'report.json'})")
+    console.print(f"report: {page}")
+
+
+@click.command()
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Engine (default: LIGGGHTS).")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory.")
+@click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where packings are kept and reused.")
+@click.pass_context
+def demo(context: click.Context, engine: str | None, output: Path | None, packings: Path | None) -> None:
+    """A small brick avalanche (cases/avalanche/small.yaml): deposit and front against the references."""
+    context.invoke(avalanche, study_path=DEMO_STUDY, engine=engine, output=output, packings=packings)

@@ -1,0 +1,129 @@
+"""`demorch campaign …`: run, follow, tabulate and plot parameter campaigns; calibrate."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from orchestrator.case import CaseError
+from orchestrator.cli.common import console, errors, fail
+
+
+@click.group()
+def campaign() -> None:
+    """Sweeps, designs and calibrations over a base case."""
+
+
+@campaign.command("run")
+@click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Campaign directory (default runs/campaigns/NAME).")
+@click.option("--jobs", "-j", type=int, default=None, help="Parallel engine processes (default: one per core).")
+@click.option("--executor", type=click.Choice(["local", "dask"]), default="local", show_default=True)
+@click.option("--dask-address", help="Scheduler address of an existing Dask cluster (e.g. started by dask-jobqueue).")
+@click.option("--rerun-failed", is_flag=True, help="Run failed runs again (their attempt moves to the attic).")
+def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, executor: str, dask_address: str | None, rerun_failed: bool) -> None:
+    """Run every pending point of CAMPAIGN_FILE; completed runs are skipped, so relaunching resumes."""
+    import os
+
+    from orchestrator.campaign.execute import run_campaign
+    from orchestrator.campaign.spec import load_campaign
+
+    try:
+        spec, _ = load_campaign(campaign_file)
+    except CaseError as error:
+        fail(str(error))
+    directory = output or Path("runs") / "campaigns" / spec.name
+    workers = jobs or os.cpu_count() or 1
+    failures: list[str] = []
+    with Progress(TextColumn("[bold]{task.fields[name]}[/]"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:
+        task = progress.add_task("planning", total=None, name=spec.name)
+
+        def update(counts: Any, summary: dict[str, Any] | None) -> None:
+            eta = counts.eta_s()
+            progress.update(
+                task,
+                total=counts.total,
+                completed=counts.skipped + counts.done + counts.failed,
+                description=f"done {counts.done}  running {counts.running}  failed {counts.failed}  remaining {counts.remaining}"
+                + (f"  skipped {counts.skipped}" if counts.skipped else "")
+                + (f"  ETA {eta:.0f} s" if eta is not None else ""),
+            )
+            if summary and summary["status"] != "completed":
+                failures.append(f"{summary['run_id']}: {summary.get('error', '')}")
+
+        try:
+            counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update)
+        except CaseError as error:
+            fail(str(error))
+    for line in failures:
+        errors.print(f"[red]failed[/] {line}", markup=True, highlight=False)
+    console.print(f"{directory}: {counts.done} run, {counts.skipped} already there, {counts.failed} failed; index: {directory / 'index.parquet'}")
+    if counts.failed:
+        sys.exit(3)
+
+
+@campaign.command("calibrate")
+@click.argument("calibration_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Calibration directory (default runs/calibrations/NAME).")
+def campaign_calibrate(calibration_file: Path, output: Path | None) -> None:
+    """Fit contact parameters to measured launches (E2 corner error); resumable, history kept."""
+    from orchestrator.campaign.calibrate import calibrate, load_calibration
+
+    try:
+        spec_name = Path(calibration_file).stem
+        directory = output or Path("runs") / "calibrations" / spec_name
+        with console.status("calibrating (each evaluation is a real engine run)"):
+            result = calibrate(load_calibration(calibration_file, directory))
+    except CaseError as error:
+        fail(str(error))
+    console.print_json(json.dumps(result))
+    console.print(f"history: {directory / 'history.jsonl'}  plot: {directory / 'convergence.png'}")
+
+
+@campaign.command("status")
+@click.argument("campaign_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def campaign_status(campaign_dir: Path) -> None:
+    """Counts of runs per status."""
+    from orchestrator.campaign.store import build_index
+
+    table = build_index(campaign_dir)
+    counts = table["status"].value_counts().to_dict() if not table.empty else {}
+    console.print(" ".join(f"{k}: {v}" for k, v in sorted(counts.items())) or "no runs")
+
+
+@campaign.command("table")
+@click.argument("campaign_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--csv", "csv_path", type=click.Path(path_type=Path), help="Also write the index as CSV.")
+def campaign_table(campaign_dir: Path, csv_path: Path | None) -> None:
+    """Print the index: parameters, status, wall time and metrics of every run."""
+    from orchestrator.campaign.store import build_index
+
+    table = build_index(campaign_dir)
+    if csv_path:
+        table.to_csv(csv_path, index=False)
+    console.print(table.to_string(max_rows=200, max_colwidth=24))
+
+
+@campaign.command("plot")
+@click.argument("campaign_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--x", "x_name", required=True, help="Swept parameter for the x axis, e.g. contacts.1.en2")
+@click.option("--y", "y_name", required=True, help="Swept parameter for the y axis.")
+@click.option("--metric", required=True, help="Metric to contour, e.g. com_travel_x_m")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="PNG path (default CAMPAIGN_DIR/METRIC.png).")
+def campaign_plot(campaign_dir: Path, x_name: str, y_name: str, metric: str, output: Path | None) -> None:
+    """Contour map of a metric over two swept parameters (a response surface, like the 2012 Fig. 7)."""
+    from orchestrator.campaign.plots import response_surface
+    from orchestrator.campaign.store import build_index
+
+    table = build_index(campaign_dir)
+    path = output or campaign_dir / f"{metric}.png"
+    try:
+        response_surface(table, x_name, y_name, metric, path)
+    except KeyError as error:
+        fail(f"no column {error} in the index; parameters are 'param.*', metrics 'metric.*'")
+    console.print(f"plot: {path}")

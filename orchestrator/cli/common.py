@@ -1,0 +1,69 @@
+"""What every `demorch` command shares: the consoles, the error exit, progress bars, tables."""
+
+from __future__ import annotations
+
+import datetime as dt
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+from rich.console import Console
+from rich.progress import Progress
+from rich.table import Table
+
+console = Console(stderr=False)
+errors = Console(stderr=True)
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+
+def fail(message: str, code: int = 2) -> None:
+    errors.print(f"[bold red]error:[/] {message}", markup=True, highlight=False, soft_wrap=True)
+    sys.exit(code)
+
+
+def default_rundir(case_name: str, engine: str) -> Path:
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path("runs") / f"{case_name}-{engine}-{stamp}"
+
+
+def progress_callback(progress: Progress, task: Any) -> Callable[[float, float], None]:
+    def update(simulated: float, end: float) -> None:
+        progress.update(task, completed=simulated, total=end, description=f"t = {simulated:.4g} / {end:.4g} s")
+
+    return update
+
+
+def metrics_table(title: str, values: dict[str, float]) -> Table:
+    table = Table(title=title, show_header=True, header_style="bold")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for key, value in values.items():
+        table.add_row(key, f"{value:.6g}")
+    return table
+
+
+def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
+    try:
+        case = with_engine(load_case(case_path), engine)
+        rundir = output or _default_rundir(case.name, case.engine.value)
+        if (rundir / RESULTS).exists():
+            _fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        with Progress(
+            TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
+            BarColumn(),
+            TextColumn("{task.description}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console,
+            transient=False,
+        ) as progress:
+            task = progress.add_task("starting", total=case.time.duration)
+            record = run_case(case, case_path.parent, rundir, progress=_progress_callback(progress, task), timeout=timeout)
+    except CaseError as error:
+        _fail(str(error))
+    except EngineError as error:
+        _fail(str(error), code=3)
+    console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
+    console.print(f"results: {rundir / RESULTS}")
+    return record

@@ -1,0 +1,193 @@
+"""`demorch`: render decks, run cases, check the installation, summarise results.
+
+One module per command group: main (this: run, render, post, doctor, brick, build-contact),
+avalanche (avalanche, demo), campaign, collapse; common holds what they share.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+from orchestrator.case import CaseError, load_case, with_engine
+from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
+from orchestrator.cli.campaign import campaign
+from orchestrator.cli.collapse import collapse
+from orchestrator.cli.common import console, default_rundir, fail, metrics_table, progress_callback
+from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
+from orchestrator.engines.mpi import MPI_ENV
+from orchestrator.post import summary as metrics
+from orchestrator.results import read_results
+from orchestrator.runner import RESULTS, render_case, run_case
+
+
+def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
+    try:
+        case = with_engine(load_case(case_path), engine)
+        rundir = output or default_rundir(case.name, case.engine.value)
+        if (rundir / RESULTS).exists():
+            fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        with Progress(
+            TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
+            BarColumn(),
+            TextColumn("{task.description}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console,
+            transient=False,
+        ) as progress:
+            task = progress.add_task("starting", total=case.time.duration)
+            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout)
+    except CaseError as error:
+        fail(str(error))
+    except EngineError as error:
+        fail(str(error), code=3)
+    console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
+    console.print(f"results: {rundir / RESULTS}")
+    return record
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="dem-orchestrator")
+@click.option("--mpi", type=click.IntRange(1, 256), default=None, metavar="N",
+              help=f"Run each LIGGGHTS engine as `mpirun -np N` (same as {MPI_ENV}=N; cases and results do not change).")
+def main(mpi: int | None) -> None:
+    """Run LIGGGHTS and YADE from one validated case file."""
+    if mpi is not None:
+        os.environ[MPI_ENV] = str(mpi)
+
+
+@main.command()
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), required=True, help="Directory for the deck.")
+def render(case_path: Path, engine: str | None, output: Path) -> None:
+    """Write the engine deck for CASE_PATH without running it."""
+    try:
+        case = with_engine(load_case(case_path), engine)
+        deck = render_case(case, case_path.parent, output)
+    except CaseError as error:
+        fail(str(error))
+    console.print(f"deck written: {deck}")
+
+
+@main.command()
+@click.argument("case_path", type=click.Path(path_type=Path))
+@click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
+@click.option("--timeout", type=float, default=None, help="Stop the engine after this many seconds.")
+def run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
+    """Run CASE_PATH and collect results.h5 and run.json."""
+    _run(case_path, engine, output, timeout)
+
+
+@main.command()
+@click.argument("rundir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the metrics as JSON.")
+def post(rundir: Path, as_json: bool) -> None:
+    """Print summary metrics of a finished run (or avalanche study) directory."""
+    if (rundir / "report.json").exists():
+        report = json.loads((rundir / "report.json").read_text())
+        try:
+            page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
+            if as_json:
+                console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
+            else:
+                console.print(study_table(rundir.name, report))
+                console.print(f"report: {page}")
+        except CaseError as error:
+            fail(str(error))
+        return
+    path = rundir / RESULTS
+    if not path.exists():
+        record = rundir / "run.json"
+        status = json.loads(record.read_text()).get("status", "unknown") if record.exists() else "unknown"
+        fail(f"{rundir} has no {RESULTS} (run status: {status})")
+    trajectory = read_results(path)
+    values = metrics.summary(trajectory)
+    if as_json:
+        console.print_json(json.dumps(values))
+    else:
+        console.print(metrics_table(f"{rundir} ({trajectory.attrs.get('engine', '?')})", values))
+
+
+@main.command()
+def doctor() -> None:
+    """Check engines, the contact-law plugin and the Python side; print what is missing."""
+    table = Table(title="dem-orchestrator doctor", header_style="bold")
+    table.add_column("component")
+    table.add_column("status")
+    table.add_column("details")
+    healthy = True
+    for name in ENGINE_NAMES:
+        info = get_adapter(name).info()
+        if info.executable:
+            table.add_row(name, "[green]ok[/]", f"{info.executable} (version {info.version or 'unknown'})")
+        else:
+            healthy = False
+            table.add_row(name, "[red]missing[/]", f"install: {info.install_hint}")
+    for name in engines_with(compiled_law=True):
+        status = get_adapter(name).law_plugin_status()
+        built = bool(status.get("built"))
+        details = str(status.get("path")) if built else "not built yet: run `demorch build-contact`"
+        table.add_row(f"bilinear law plugin ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
+    from orchestrator.studies.avalanche.study import PACKAGED_REFERENCE, reference_path
+
+    reference = reference_path()
+    origin = "packaged copy" if reference == PACKAGED_REFERENCE else "project"
+    table.add_row("reference numbers", "[green]found[/]" if reference.is_file() else "[red]missing[/]", f"{reference} ({origin})")
+    console.print(table)
+    if not healthy:
+        sys.exit(1)
+
+
+@main.command()
+@click.option("--layout", "layouts", type=(int, int, int), multiple=True, help="Spheres along length, width, thickness (repeatable). Default: 4 2 1, 8 2 1, 6 3 2, 12 6 2.")
+@click.option("--bevel", "bevel_deg", type=click.FloatRange(0.0, 10.0), default=0.0, show_default=True, help="Turn of three faces, degrees (2 for the paper's modified bricks).")
+@click.option("--size", type=(float, float, float), default=(0.031, 0.015, 0.008), show_default=True, help="Length, width, thickness (m).")
+@click.option("--density", type=click.FloatRange(min=0.0, min_open=True), default=1700.0, show_default=True, help="kg/m³.")
+def brick(layouts: tuple[tuple[int, int, int], ...], bevel_deg: float, size: tuple[float, float, float], density: float) -> None:
+    """How well each clump resolution fits the brick: spheres, radii, surface gap, mass, inertia."""
+    from orchestrator.bricks import BrickClump
+
+    if min(size) <= 0.0:
+        fail(f"--size: every dimension must be > 0 m (got {size})")
+    for layout in layouts:
+        if not all(1 <= n <= 64 for n in layout):
+            fail(f"--layout: each count must be in [1, 64] (got {layout})")
+    table = Table(title=f"brick {size[0] * 1e3:g} × {size[1] * 1e3:g} × {size[2] * 1e3:g} mm, bevel {bevel_deg:g}°", header_style="bold")
+    for column in ("layout", "spheres", "radius (mm)", "max / mean gap to the brick (mm)", "mass (g)", "I_x, I_y, I_z (kg m²)"):
+        table.add_column(column)
+    for layout in layouts or ((4, 2, 1), (8, 2, 1), (6, 3, 2), (12, 6, 2)):
+        clump = BrickClump(*size, density, layout, bevel_deg)
+        worst, mean = clump.surface_deviation()
+        radii = f"{clump.radii.min() * 1e3:.2f}–{clump.radius * 1e3:.2f}" if np.ptp(clump.radii) > 1e-9 else f"{clump.radius * 1e3:.2f}"
+        table.add_row(" × ".join(map(str, layout)), str(clump.n_spheres), radii, f"{worst * 1e3:.2f} / {mean * 1e3:.2f}",
+                      f"{clump.mass * 1e3:.3f}", ", ".join(f"{i:.3g}" for i in clump.principal_inertia))
+    console.print(table)
+
+
+@main.command("build-contact")
+@click.option("--force", is_flag=True, help="Rebuild even if a cached build exists.")
+def build_contact(force: bool) -> None:
+    """Build (or find in the cache) the compiled bilinear contact law of every engine that compiles it."""
+    for name in engines_with(compiled_law=True):
+        adapter = get_adapter(name)
+        try:
+            path = adapter.law_plugin(force=force, progress=lambda message: console.print(message))
+        except ContactBuildError as error:
+            fail(str(error), code=4)
+        console.print(f"plugin ({name}): {path}")
+        console.print_json(json.dumps(adapter.law_plugin_status(), default=str))
+
+
+for command in (avalanche, demo, campaign, collapse):
+    main.add_command(command)

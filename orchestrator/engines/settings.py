@@ -1,0 +1,43 @@
+"""Case and study sections that one engine reads and the others ignore.
+
+They live here, beside the engines, so that the case model names no engine: `Case` and the
+studies inherit these sections. This module imports nothing from the package.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class CocdSettings(_Section):
+    """The cocd engine's solver: Clarabel (interior point, reference), SCS (first order), PIQP (2D only)."""
+
+    solver: Literal["clarabel", "scs", "piqp"] = "clarabel"
+    tolerance: Annotated[float, Field(gt=0.0, le=1e-2, allow_inf_nan=False)] = 1e-8
+
+
+class EngineSections(_Section):
+    """Sections of a case read by one engine only."""
+
+    cocd: CocdSettings = CocdSettings()  # engine: cocd only
+
+    def engine_sections(self) -> dict[str, object]:
+        """The engine-only sections as data, to carry from a study into the cases it makes."""
+        return {name: getattr(self, name).model_dump() for name in EngineSections.model_fields}
+
+
+class StudyEngineSections(EngineSections):
+    """A study's engine-only sections: those of its cases, and the step of an implicit engine."""
+
+    # cocd has no contact stiffness, so no contact duration to take a fraction of: its step is this.
+    cocd_step: Annotated[float, Field(gt=0.0, le=0.01, allow_inf_nan=False)] = 1e-3
+
+    def implicit_step(self) -> float:
+        """Δt (s) for an engine with the `implicit` capability."""
+        return self.cocd_step

@@ -1,0 +1,196 @@
+"""One run directory: its identity, its saved inputs, its record, its status and its lock.
+
+A run's id hashes everything that decides its results: the canonical inputs (a validated case, or
+a study), the step schedule, and the engine build (engine version, deck templates or runner
+program, compiled contact plugin). The same inputs on the same build give the same id; a template
+or plugin change gives another. Layout of a run directory:
+
+    case.json   the validated inputs, canonical JSON (a case, or a study for a study run)
+    run.json    the record: run_id, build, status (running | completed | failed), timings, metrics
+    .lock       held (fcntl) by the process working in the directory: a run is `running` while
+                its lock is held, and nothing else (no PID file) decides it
+    results.h5  the frames (case runs; a study run's record points at its release's)
+
+Reading a run back checks case.json against the recorded id, and the recorded build against the
+current one: a run whose inputs or build changed is `stale`, never `completed`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as dt
+import errno
+import fcntl
+import hashlib
+import json
+import os
+import shutil
+from collections.abc import Iterator
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import h5py
+from pydantic import BaseModel
+
+from orchestrator.case import Case
+from orchestrator.engines import get_adapter
+
+RUN_RECORD = "run.json"
+RESULTS = "results.h5"
+CASE_COPY = "case.json"
+LOCK = ".lock"
+ATTIC = "attic"
+STATUSES = ("pending", "running", "completed", "failed", "stale", "incomplete")
+
+
+def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
+    """Write JSON through a temporary file and a rename: a reader never sees half a file."""
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+    os.replace(temporary, path)
+
+
+def read_json(path: Path) -> dict[str, Any] | None:
+    """The JSON object in `path`, or None when it is missing, unreadable or not an object."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def now() -> str:
+    return dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+
+
+# -- identity -----------------------------------------------------------------------------------
+@lru_cache(maxsize=None)
+def _engine_version(engine: str) -> str | None:
+    return get_adapter(engine).info().version
+
+
+def build_stamp(engine: str) -> dict[str, Any]:
+    """What turns inputs into results besides the inputs: engine, its version, the hash of its deck
+    templates or runner program, and of its compiled contact plugin (when it has one)."""
+    adapter = get_adapter(engine)
+    return {"engine": engine, "version": _engine_version(engine), **adapter.build_inputs()}
+
+
+def canonical_inputs(inputs: BaseModel) -> dict[str, Any]:
+    return inputs.model_dump(mode="json")
+
+
+def run_id(inputs: BaseModel, build: dict[str, Any] | None = None) -> str:
+    """16 hex digits of sha256 over the canonical inputs, the schedule (a case's) and the build."""
+    from orchestrator import physics
+
+    engine = getattr(inputs, "engine").value
+    stamp: dict[str, Any] = {"inputs": canonical_inputs(inputs), "build": build if build is not None else build_stamp(engine)}
+    if isinstance(inputs, Case):
+        plan = physics.schedule(inputs)
+        stamp["schedule"] = [plan.dt, plan.output_every, plan.frames, plan.total_steps]
+    return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
+
+
+def save_inputs(directory: Path, inputs: BaseModel) -> None:
+    """Keep the validated inputs beside the run (readers take masses and the schedule from them)."""
+    (directory / CASE_COPY).write_text(json.dumps(canonical_inputs(inputs), indent=2) + "\n")
+
+
+def saved_case(directory: Path) -> Case:
+    """The case a run directory was made from (case.json)."""
+    return Case.model_validate_json((directory / CASE_COPY).read_text())
+
+
+# -- locking ------------------------------------------------------------------------------------
+class Busy(RuntimeError):
+    """Another process holds the run directory's lock."""
+
+
+@contextlib.contextmanager
+def locked(directory: Path, wait: bool = True) -> Iterator[None]:
+    """Hold the directory's lock (created with the directory). wait=False raises Busy when held."""
+    directory.mkdir(parents=True, exist_ok=True)
+    with open(directory / LOCK, "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+        except OSError as error:
+            if error.errno in (errno.EAGAIN, errno.EACCES):
+                raise Busy(f"{directory} is in use by another process") from None
+            raise
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def is_locked(directory: Path) -> bool:
+    """True while some process holds the directory's lock (a live run)."""
+    path = directory / LOCK
+    if not path.exists():
+        return False
+    with open(path, "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return True
+        fcntl.flock(handle, fcntl.LOCK_UN)
+    return False
+
+
+# -- status -------------------------------------------------------------------------------------
+def results_readable(path: Path) -> bool:
+    try:
+        with h5py.File(path, "r") as store:
+            return "frames/position" in store
+    except (OSError, KeyError, ValueError):
+        return False
+
+
+def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: bool = True, held: bool = False) -> str:
+    """pending | running | completed | failed | stale | incomplete.
+
+    running: a process holds the lock. completed: the record says so, the results read back, its
+    case.json (an `inputs_model`: a Case, or a study) hashes to its id, and (check_build) its build
+    is the current one; a completed run that fails the last two checks is stale. incomplete: its
+    process died before it finished. held: the caller holds the lock (so do not probe it).
+    """
+    if not held and is_locked(directory):
+        return "running"
+    if not directory.exists() or not any(p.name != LOCK for p in directory.iterdir()):
+        return "pending"
+    record = read_json(directory / RUN_RECORD)
+    if record is None:
+        return "incomplete"
+    if record.get("status") == "failed":
+        return "failed"
+    if record.get("status") != "completed" or not results_readable(directory / str(record.get("results", RESULTS))):
+        return "incomplete"
+    return "completed" if current(directory, record, inputs_model, check_build) else "stale"
+
+
+def current(directory: Path, record: dict[str, Any], inputs_model: type[BaseModel] = Case, check_build: bool = True) -> bool:
+    """The saved inputs hash to the recorded id with the recorded build, and that build is today's."""
+    build = record.get("build")
+    if "run_id" not in record or not isinstance(build, dict):
+        return False
+    try:
+        inputs = inputs_model.model_validate_json((directory / CASE_COPY).read_text())
+    except (ValueError, OSError):
+        return False
+    if run_id(inputs, build) != record["run_id"]:
+        return False
+    return not check_build or build == build_stamp(str(build.get("engine", "")))
+
+
+def retire(directory: Path, root: Path) -> Path:
+    """Move what a dead, failed or stale attempt left to root/attic/<name>-<time> (nothing computed is
+    deleted), so the directory can run again. The lock file stays: call it under the lock."""
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+    target = root / ATTIC / f"{directory.name}-{stamp}"
+    target.mkdir(parents=True)
+    for entry in directory.iterdir():
+        if entry.name != LOCK:
+            shutil.move(str(entry), target / entry.name)
+    return target
