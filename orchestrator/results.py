@@ -12,8 +12,10 @@ Layout (identical for every engine):
     /frames/angular_velocity  (frames, bodies, 3)  rad/s
     /frames/orientation       (frames, bodies, 4)  unit quaternion (w, x, y, z); NaN where the
                                                    engine does not track it (LIGGGHTS spheres)
-Root attributes: format version, engine, engine version, case name, dt.
-A body missing from a frame (lost by the engine) has NaN state in that frame.
+Root attributes (ATTRIBUTES): format_version, engine, engine_version, case_name,
+orientation_tracked (False where orientations are NaN); stopped_at_rest (s) and rest_speed (m/s)
+when the run ended at rest. A body missing from a frame (lost by the engine) has NaN state there.
+LAYOUT below is this table as data; a test reads a produced file against it.
 """
 
 from __future__ import annotations
@@ -26,6 +28,22 @@ import h5py
 import numpy as np
 
 FORMAT_VERSION = 1
+
+# dataset → (dtype kind, rank): f float, i integer, S bytes
+LAYOUT: dict[str, tuple[str, int]] = {
+    "time": ("f", 1),
+    "bodies/id": ("i", 1),
+    "bodies/material": ("S", 1),
+    "bodies/mass": ("f", 1),
+    "bodies/radius": ("f", 1),
+    "bodies/inertia": ("f", 2),
+    "frames/position": ("f", 3),
+    "frames/velocity": ("f", 3),
+    "frames/angular_velocity": ("f", 3),
+    "frames/orientation": ("f", 3),
+}
+ATTRIBUTES = ("format_version", "engine", "engine_version", "case_name", "orientation_tracked")  # always written
+REST_ATTRIBUTES = ("stopped_at_rest", "rest_speed")  # written when the run ended at rest
 
 
 @dataclass

@@ -1,15 +1,24 @@
-"""Shared builders for small, fast cases and a guard that no engine starts where none may."""
+"""Shared builders for small, fast cases, and the guards of the test tiers.
+
+Tiers: `pytest -m "not engine"` is the fast tier (no engine, no compiler); every test that starts
+an engine, the cocd runner or the plugin compiler carries `@pytest.mark.engine`, which the guard
+below enforces; `-m slow` selects the long studies left out of the default run.
+"""
 
 from __future__ import annotations
 
 import math
 import shutil
 import subprocess
+from pathlib import Path
 from typing import Any
 
 import pytest
 
+from orchestrator.bricks import BrickClump
 from orchestrator.case import Case, parse_case
+from orchestrator.studies.avalanche.packing import loose_grid
+from orchestrator.studies.avalanche.study import AvalancheStudy
 
 requires_liggghts = pytest.mark.skipif(shutil.which("liggghts") is None, reason="LIGGGHTS not installed (run scripts/setup.sh)")
 requires_yade = pytest.mark.skipif(shutil.which("yade") is None, reason="YADE not installed (run scripts/setup.sh)")
@@ -70,6 +79,59 @@ def sliding_case(engine: str, angle_deg: float = 30.0, mu: float = 0.2, duration
     )
 
 
+BRICK = {"length": 0.031, "width": 0.015, "thickness": 0.008, "layout": [4, 2, 1]}
+
+
+def pile_case(engine: str, count: int = 50, duration: float = 1.0) -> Case:
+    brick = BrickClump(BRICK["length"], BRICK["width"], BRICK["thickness"], 1700.0, tuple(BRICK["layout"]))
+    positions, orientations = loose_grid(brick, count, (-0.08, -0.08, 0.001), (5, 5), seed=7)
+    return parse_case(
+        {
+            "name": "pile",
+            "engine": engine,
+            "time": {"duration": duration, "output_interval": 0.02},
+            "materials": [{"name": "brick", "density": 1700.0}, {"name": "board", "density": 1400.0}],
+            "contacts": [
+                {"materials": ["brick", "brick"], "law": "bilinear", "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27},
+                {"materials": ["brick", "board"], "law": "bilinear", "en2": 0.53, "mu": 0.46, "kn": 1e5, "kt_over_kn": 0.42},
+            ],
+            "shapes": [{"name": "brick", **BRICK}],
+            "bodies": {
+                "clumps": [
+                    {"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()}
+                    for p, q in zip(positions, orientations)
+                ]
+            },
+            "walls": [{"type": "rectangle", "name": "floor", "material": "board", "origin": [-0.3, -0.3, 0], "edge1": [0.6, 0, 0], "edge2": [0, 0.6, 0]}],
+        }
+    )
+
+
+def tiny_study(engine: str) -> AvalancheStudy:
+    """≈30 bricks in a 12 × 10 cm box launched from 25 cm: a real avalanche in well under a minute.
+
+    The boards are 0.8 m wide: deposits of this study spread to |y| ≈ 0.24 m, and a brick that
+    slides off a board edge leaves the simulation (a failed run).
+
+    k_n = 2e4 N/m (the 2012 study found E2G flat between 1e4 and 1e6) makes the step 2.2 × longer.
+    The packing's contacts are given explicitly, so releases with other contacts share its packing.
+    """
+    contacts = {
+        "brick_brick": {"en2": 0.13, "mu": 0.86, "kn": 2e4, "kt_over_kn": 0.27},
+        "brick_board": {"en2": 0.53, "mu": 0.46, "kn": 2e4, "kt_over_kn": 0.42},
+    }
+    return AvalancheStudy.model_validate(
+        {
+            "name": "tiny",
+            "engine": engine,
+            "geometry": {"launch_height": 0.25, "board_length": 0.8, "board_width": 0.8, "box_depth": 0.12, "box_width": 0.1, "box_height": 0.08},
+            "packing": {"volume": 1.9e-4, "settle_time": 0.4, "contacts": contacts},
+            "contacts": contacts,
+            "release": {"duration": 1.6, "output_interval": 0.02},
+        }
+    )
+
+
 @pytest.fixture
 def no_engine_process(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fail the test if anything tries to start a process."""
@@ -78,3 +140,23 @@ def no_engine_process(monkeypatch: pytest.MonkeyPatch) -> None:
         raise AssertionError(f"an engine process was started: {args[0] if args else kwargs}")
 
     monkeypatch.setattr(subprocess, "Popen", refuse)
+
+
+# Programs that only an engine-marked test may start: the engines, MPI, the plugin build, the cocd runner.
+ENGINE_PROGRAMS = {"liggghts", "yade", "yade-double", "mpirun", "stdbuf", "bash", "g++", "c++"}
+
+
+@pytest.fixture(autouse=True)
+def engines_only_in_marked_tests(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A test without `@pytest.mark.engine` that starts an engine or a compiler fails, naming it."""
+    if request.node.get_closest_marker("engine") is not None:
+        return
+    real = subprocess.Popen
+
+    def guarded(args: Any, *rest: Any, **options: Any) -> Any:
+        words = [str(w) for w in (args if isinstance(args, (list, tuple)) else str(args).split())]
+        if words and (Path(words[0]).name in ENGINE_PROGRAMS or "orchestrator.engines.cocd" in words):
+            raise AssertionError(f"this test starts {Path(words[0]).name} without @pytest.mark.engine: {' '.join(words)[:200]}")
+        return real(args, *rest, **options)
+
+    monkeypatch.setattr(subprocess, "Popen", guarded)

@@ -15,7 +15,7 @@ from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case
 
-from conftest import engine_params
+from conftest import engine_params, tiny_study
 
 BRICK = BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1))
 
@@ -94,31 +94,10 @@ def test_flips_are_refused_for_a_random_pour() -> None:
         AvalancheStudy.model_validate({"name": "x", "packing": {"kind": "random_pour", "flips": True}})
 
 
-def tiny_study(engine: str) -> AvalancheStudy:
-    """≈30 bricks in a 12 × 10 cm box launched from 25 cm: a real avalanche in well under a minute.
-
-    The boards are 0.8 m wide: deposits of this study spread to |y| ≈ 0.24 m, and a brick that
-    slides off a board edge leaves the simulation (a failed run).
-
-    k_n = 2e4 N/m (the 2012 study found E2G flat between 1e4 and 1e6) makes the step 2.2 × longer.
-    The packing's contacts are given explicitly, so releases with other contacts share its packing.
-    """
-    contacts = {
-        "brick_brick": {"en2": 0.13, "mu": 0.86, "kn": 2e4, "kt_over_kn": 0.27},
-        "brick_board": {"en2": 0.53, "mu": 0.46, "kn": 2e4, "kt_over_kn": 0.42},
-    }
-    return AvalancheStudy.model_validate(
-        {
-            "name": "tiny",
-            "engine": engine,
-            "geometry": {"launch_height": 0.25, "board_length": 0.8, "board_width": 0.8, "box_depth": 0.12, "box_width": 0.1, "box_height": 0.08},
-            "packing": {"volume": 1.9e-4, "settle_time": 0.4, "contacts": contacts},
-            "contacts": contacts,
-            "release": {"duration": 1.6, "output_interval": 0.02},
-        }
-    )
 
 
+
+@pytest.mark.engine
 def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Bricks (clumps) poured onto mesh walls move the same with bins far larger than LIGGGHTS' own.
 

@@ -102,6 +102,7 @@ def _frames(path: Path) -> np.ndarray:
     return np.array([np.array(b.split("\n", 8)[8].split(), dtype=float).reshape(-1, 3) for b in blocks])
 
 
+@pytest.mark.engine
 @requires_liggghts
 def test_build_is_cached_outside_the_clone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from orchestrator.engines.liggghts import plugin as contact_build

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -155,7 +156,7 @@ def test_dask_local_cluster_gives_the_same_results(tmp_path: Path) -> None:
 @pytest.mark.engine
 def test_avalanche_campaign_shares_one_packing(tmp_path: Path) -> None:
     """A campaign over an avalanche study: two board frictions, one packing made once and fed to both."""
-    from test_avalanche import tiny_study
+    from conftest import tiny_study
 
     study = tiny_study("liggghts").model_dump(mode="json")
     (tmp_path / "study.yaml").write_text(yaml.safe_dump(study))
@@ -194,3 +195,62 @@ def test_every_shipped_campaign_expands_to_valid_distinct_runs(path: Path) -> No
     expanded = expand(spec, base)
     assert expanded, f"{path}: no points"
     assert len({store.run_id(point) for _, point in expanded}) == len(expanded)
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_a_template_change_reruns_the_runs_it_affects(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The run id hashes the deck templates: after a template edit a relaunch runs every point again
+    and reports the old runs as stale, never as completed."""
+    templates = tmp_path / "templates"
+    shutil.copytree(REPO / "templates", templates)
+    monkeypatch.setenv("DEMORCH_TEMPLATES", str(templates))  # read by this process and the workers it spawns
+    campaign = write_campaign(tmp_path, [{"kind": "grid", "parameters": {"gravity.2": [-9.81, -5.0]}}])
+    first = run_campaign(campaign, tmp_path / "out", jobs=1)
+    assert (first.done, first.skipped) == (2, 0)
+    deck = templates / "liggghts" / "case.in.j2"
+    deck.write_text(deck.read_text() + "# an edited template\n")
+    second = run_campaign(campaign, tmp_path / "out", jobs=1)
+    assert (second.done, second.skipped, second.failed) == (2, 0, 0)  # rerun, not reported as done
+    statuses = sorted(store.build_index(tmp_path / "out")["status"])
+    assert statuses == ["completed", "completed", "stale", "stale"]
+    assert run_campaign(campaign, tmp_path / "out", jobs=1).skipped == 2  # and now current
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_two_launches_on_one_directory_run_each_point_once(tmp_path: Path) -> None:
+    """Two `campaign run` at once on one directory share the work through the run locks."""
+    campaign = write_campaign(tmp_path, [{"kind": "grid", "parameters": {"gravity.2": [-9.81, -8.0, -7.0, -6.0, -5.0, -4.0]}}])
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "orchestrator.cli", "campaign", "run", str(campaign), "-o", str(out), "-j", "1"]
+    launches = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path) for _ in range(2)]
+    outputs = [launch.communicate(timeout=300)[0] for launch in launches]
+    assert all(launch.returncode == 0 for launch in launches), outputs
+    ran = [int(line.split(": ", 1)[1].split(" run,")[0]) for text in outputs for line in text.splitlines() if " run, " in line]
+    assert len(ran) == 2 and sum(ran) == 6, outputs  # each point run by exactly one of the two
+    runs = list((out / "runs").iterdir())
+    assert len(runs) == 6 and all(store.status(d) == "completed" for d in runs)
+    assert not (out / "attic").exists()  # no attempt was interrupted or repeated
+
+
+@pytest.mark.engine
+def test_a_campaign_file_with_engine_cocd_runs(tmp_path: Path) -> None:
+    """`engine:` in a campaign file accepts every engine of the registry, cocd included."""
+    base = {
+        "name": "rest", "time": {"duration": 0.02, "output_interval": 0.01},
+        "materials": [{"name": "ball", "density": 2500.0}, {"name": "floor", "density": 2500.0}],
+        "contacts": [{"materials": ["ball", "ball"], "en2": 0.5, "mu": 0.5, "kn": 1.0e5, "kt_over_kn": 0.4},
+                     {"materials": ["ball", "floor"], "en2": 0.5, "mu": 0.5, "kn": 1.0e5, "kt_over_kn": 0.4}],
+        "walls": [{"type": "rectangle", "name": "floor", "material": "floor", "origin": [-0.1, -0.1, 0.0],
+                   "edge1": [0.2, 0.0, 0.0], "edge2": [0.0, 0.2, 0.0]}],
+        "bodies": {"spheres": [{"material": "ball", "radius": 0.005, "position": [0.0, 0.0, 0.005]}]},
+    }
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))
+    campaign = tmp_path / "campaign.yaml"
+    campaign.write_text(yaml.safe_dump({"name": "cocd", "base": "base.yaml", "engine": "cocd",
+                                        "designs": [{"kind": "grid", "parameters": {"contacts.1.mu": [0.2, 0.5]}}]}))
+    counts = run_campaign(campaign, tmp_path / "out", jobs=1)
+    assert (counts.done, counts.failed) == (2, 0)
+    index = store.build_index(tmp_path / "out")
+    assert set(index["engine"]) == {"cocd"} and set(index["status"]) == {"completed"}

@@ -146,6 +146,7 @@ def test_bad_mpi_settings_name_the_variable(variable: str, value: str, monkeypat
         get_adapter("liggghts")
 
 
+@pytest.mark.engine
 def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None:
     """A box of metres around millimetre spheres gets larger neighbour bins; the physics is unchanged.
 

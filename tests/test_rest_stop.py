@@ -18,8 +18,7 @@ from orchestrator.case import Case, CaseError, parse_case
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
 
-from conftest import engine_params
-from test_settling import pile_case
+from conftest import engine_params, pile_case
 
 THRESHOLD = 0.01  # m/s
 CHECK = 0.1  # s, five output intervals of the pile case
@@ -86,6 +85,7 @@ def test_no_stop_before_after(engine: str, tmp_path: Path) -> None:
     assert trajectory.n_frames == 26
 
 
+@pytest.mark.engine
 def test_without_the_setting_the_whole_duration_runs(tmp_path: Path) -> None:
     case = resting_spheres_case("cocd")
     data = case.model_dump(mode="json")
@@ -96,6 +96,7 @@ def test_without_the_setting_the_whole_duration_runs(tmp_path: Path) -> None:
     assert trajectory.time[-1] == pytest.approx(0.05)
 
 
+@pytest.mark.engine
 def test_cocd_stops_at_rest_too(tmp_path: Path) -> None:
     data = resting_spheres_case("cocd").model_dump(mode="json")
     data["time"]["step"] = 1e-3
@@ -120,7 +121,7 @@ def stray_ball_case(engine: str, stray_fraction: float | None) -> Case:
     return parse_case(data)
 
 
-@pytest.mark.parametrize("engine", [*engine_params(), "cocd"])
+@pytest.mark.parametrize("engine", [*engine_params(), pytest.param("cocd", marks=pytest.mark.engine)])
 def test_a_stray_body_holds_the_rms_criterion_but_not_the_stray_fraction(engine: str, tmp_path: Path) -> None:
     """With stray_fraction 5 %, the rolling ball (2.3 %) is left out and the run stops at `after`;
     without it, the ball's RMS share keeps the run going for the whole duration."""
@@ -136,7 +137,7 @@ def test_a_stray_body_holds_the_rms_criterion_but_not_the_stray_fraction(engine:
     assert ran.time[-1] == pytest.approx(0.5, abs=1e-3)
 
 
-@pytest.mark.parametrize("engine", [*engine_params(), "cocd"])
+@pytest.mark.parametrize("engine", [*engine_params(), pytest.param("cocd", marks=pytest.mark.engine)])
 def test_glued_spheres_are_not_in_the_moving_mass(engine: str, tmp_path: Path) -> None:
     """A glued sphere of radius 1 cm (8 × a 5 mm sphere) next to the rolling ball, with stray_fraction
     1.5 %: the ball weighs 2.3 % of the moving mass, so the run must not stop. Counting the glued

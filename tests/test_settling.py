@@ -8,42 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.bricks import BrickClump
 from orchestrator.case import Case, parse_case
 from orchestrator.post.summary import kinetic_energy
-from orchestrator.studies.avalanche.packing import loose_grid
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
 
-from conftest import engine_params, requires_liggghts
-
-BRICK = {"length": 0.031, "width": 0.015, "thickness": 0.008, "layout": [4, 2, 1]}
-
-
-def pile_case(engine: str, count: int = 50, duration: float = 1.0) -> Case:
-    brick = BrickClump(BRICK["length"], BRICK["width"], BRICK["thickness"], 1700.0, tuple(BRICK["layout"]))
-    positions, orientations = loose_grid(brick, count, (-0.08, -0.08, 0.001), (5, 5), seed=7)
-    return parse_case(
-        {
-            "name": "pile",
-            "engine": engine,
-            "time": {"duration": duration, "output_interval": 0.02},
-            "materials": [{"name": "brick", "density": 1700.0}, {"name": "board", "density": 1400.0}],
-            "contacts": [
-                {"materials": ["brick", "brick"], "law": "bilinear", "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27},
-                {"materials": ["brick", "board"], "law": "bilinear", "en2": 0.53, "mu": 0.46, "kn": 1e5, "kt_over_kn": 0.42},
-            ],
-            "shapes": [{"name": "brick", **BRICK}],
-            "bodies": {
-                "clumps": [
-                    {"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()}
-                    for p, q in zip(positions, orientations)
-                ]
-            },
-            "walls": [{"type": "rectangle", "name": "floor", "material": "board", "origin": [-0.3, -0.3, 0], "edge1": [0.6, 0, 0], "edge2": [0, 0.6, 0]}],
-        }
-    )
-
+from conftest import engine_params, requires_liggghts, BRICK, pile_case
 
 @pytest.mark.parametrize("engine", engine_params())
 def test_fifty_bricks_settle_without_damping(engine: str, tmp_path: Path) -> None:

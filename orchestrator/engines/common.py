@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -112,3 +113,12 @@ def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
             times.append(float(time[0]))
             rows.append(state)
     return times, rows
+
+
+def package_version(package: str) -> str | None:
+    """The installed version of a Debian package (dpkg-query), or None."""
+    try:
+        result = subprocess.run(["dpkg-query", "-W", "-f=${Version}", package], capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return result.stdout.strip() or None

@@ -18,7 +18,12 @@ from typing import Any
 
 import jinja2
 
-TEMPLATE_ROOT = Path(os.environ.get("DEMORCH_TEMPLATES", Path(__file__).resolve().parents[2] / "templates"))
+PACKAGED_TEMPLATES = Path(__file__).resolve().parents[2] / "templates"
+
+
+def template_root() -> Path:
+    """$DEMORCH_TEMPLATES (a user's own copy of the deck templates), else the project's templates/."""
+    return Path(os.environ.get("DEMORCH_TEMPLATES", PACKAGED_TEMPLATES))
 
 _SAFE_DECK_WORD = re.compile(r"^[A-Za-z0-9_./+\- :]*$")  # no newline, $, #, &, quotes
 
@@ -78,11 +83,15 @@ def _liggghts_finalize(value: Any) -> str:
     return text
 
 
-@lru_cache(maxsize=None)
 def environment(engine: str) -> jinja2.Environment:
+    return _environment(engine, template_root())
+
+
+@lru_cache(maxsize=None)
+def _environment(engine: str, root: Path) -> jinja2.Environment:
     finalize = _yade_finalize if engine == "yade" else _liggghts_finalize
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATE_ROOT / engine)),
+        loader=jinja2.FileSystemLoader(str(root / engine)),
         undefined=jinja2.StrictUndefined,
         keep_trailing_newline=True,
         trim_blocks=True,
@@ -103,7 +112,7 @@ def template_hash(engine: str) -> str:
     """sha256 over every template file of an engine: recorded in run.json to tie results to decks."""
     digest = hashlib.sha256()
     # cocd has no template: its deck is data, and what turns it into steps is the package's solver
-    folder = Path(__file__).resolve().parent / "cocd" if engine == "cocd" else TEMPLATE_ROOT / engine
+    folder = Path(__file__).resolve().parent / "cocd" if engine == "cocd" else template_root() / engine
     for path in sorted(folder.rglob("*.py") if engine == "cocd" else folder.rglob("*")):
         if path.is_file():
             digest.update(path.relative_to(folder.parent).as_posix().encode())

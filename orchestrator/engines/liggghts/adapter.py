@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import subprocess
 from pathlib import Path
 from typing import Callable
 
@@ -31,14 +30,6 @@ INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
 
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
-
-
-def _package_version(package: str) -> str | None:
-    try:
-        result = subprocess.run(["dpkg-query", "-W", "-f=${Version}", package], capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    return result.stdout.strip() or None
 
 
 def id_ranges(ids: list[int]) -> str:
@@ -239,7 +230,7 @@ class LiggghtsAdapter(AdapterDefaults):
         return EngineInfo(
             name=self.name,
             executable=shutil.which(self.executable),
-            version=_package_version("liggghts"),
+            version=common.package_version("liggghts"),
             install_hint=INSTALL_HINT,
         )
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -50,14 +49,8 @@ class YadeAdapter(AdapterDefaults):
 
     def info(self) -> EngineInfo:
         path = shutil.which(self.executable)
-        version = None
-        if path:
-            try:
-                out = subprocess.run([path, "--version"], capture_output=True, text=True, timeout=60).stdout
-                match = re.search(r"Yade version:\s*(\S+)", out)
-                version = match.group(1) if match else None
-            except (OSError, subprocess.TimeoutExpired):
-                version = None
+        # The Debian package's version: asking `yade --version` starts YADE (a second or two).
+        version = common.package_version("yade") if path else None
         return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
 
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
