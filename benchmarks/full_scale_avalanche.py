@@ -5,7 +5,7 @@ the study's report (plots, HTML) under runs/full-scale/, and a progress log in r
 It takes an hour or more: it is a measurement, not a test. Environment: BENCH_OUTPUT (study
 directory, default runs/full-scale), BENCH_RESULT (the JSON), BENCH_ENGINE (override the study's
 engine); DEMORCH_LIGGGHTS_MPI and DEMORCH_LIGGGHTS_GRID as for any run (the studies' default grid
-splits across the flow: see avalanche_study.run_study).
+splits across the flow: see studies/avalanche/study.py, AvalancheKind.processor_grid).
 
 Why a script of its own: the figure users ask for is the wall time of the real thing (packing plus
 release, until the deposit is at rest), with its steps per second and peak memory, on this machine.

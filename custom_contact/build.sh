@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds libdemorch_bilinear.so against Debian's libliggghts-dev headers into $1 (an empty dir).
-# Usage: build.sh OUTPUT_DIR   (called by orchestrator/contact_build.py, which caches the result)
+# Usage: build.sh OUTPUT_DIR   (called by orchestrator/engines/liggghts/plugin.py, which caches the result)
 set -euo pipefail
 out="$1"
 here="$(cd "$(dirname "$0")" && pwd)"

@@ -102,7 +102,7 @@ def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path, m
     """Bricks (clumps) poured onto mesh walls move the same with bins far larger than LIGGGHTS' own.
 
     LIGGGHTS' bins only sort spheres and triangles before the distance tests, so larger bins (the
-    cap of engines/liggghts.py, here forced to 2.2 cm against the 6 mm default) may change the order
+    cap of engines/liggghts/adapter.py, here forced to 2.2 cm against the 6 mm default) may change the order
     of the force sums, never a force. Measured: the two pours agree bit for bit until the first
     impacts (0.1 s), then differ by round-off that the collisions amplify (1.5e-14 m at 0.12 s,
     5e-11 m at 0.16 s, about 10 x per 0.01 s, as chaotic granular flow does). A contact missed or

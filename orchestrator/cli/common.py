@@ -41,29 +41,3 @@ def metrics_table(title: str, values: dict[str, float]) -> Table:
     for key, value in values.items():
         table.add_row(key, f"{value:.6g}")
     return table
-
-
-def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
-    try:
-        case = with_engine(load_case(case_path), engine)
-        rundir = output or _default_rundir(case.name, case.engine.value)
-        if (rundir / RESULTS).exists():
-            _fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
-        with Progress(
-            TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
-            BarColumn(),
-            TextColumn("{task.description}"),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=console,
-            transient=False,
-        ) as progress:
-            task = progress.add_task("starting", total=case.time.duration)
-            record = run_case(case, case_path.parent, rundir, progress=_progress_callback(progress, task), timeout=timeout)
-    except CaseError as error:
-        _fail(str(error))
-    except EngineError as error:
-        _fail(str(error), code=3)
-    console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
-    console.print(f"results: {rundir / RESULTS}")
-    return record

@@ -1,6 +1,6 @@
 """COCD adapter: a JSON deck, `python -m orchestrator.engines.cocd`, the frame stream → Trajectory.
 
-COCD (orchestrator/cocd) runs in its own process like the other engines, so timeouts, logs,
+COCD (orchestrator/engines/cocd) runs in its own process like the other engines, so timeouts, logs,
 progress and failure handling are the same. It takes spheres (3D) or spheres in one plane (2D,
 `planar`), glued spheres, rectangle walls with orthogonal edges and wall removal; contacts are
 perfectly inelastic with the pair's μ (e_n², k_n and k_t are not used: there is no stiffness).
