@@ -35,7 +35,8 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from orchestrator.case import parse_case  # noqa: E402
-from orchestrator.engines.liggghts.adapter import CLUMP_COLUMNS, clump_states, read_binary_dump, read_dump  # noqa: E402
+from orchestrator.engines.liggghts.deck import CLUMP_COLUMNS  # noqa: E402
+from orchestrator.engines.liggghts.dump import clump_states, read_binary_dump, read_dump  # noqa: E402
 from orchestrator.engines.common import read_frames  # noqa: E402
 
 BRICKS = 6300

@@ -38,14 +38,14 @@ sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
 from orchestrator.case import RestStop  # noqa: E402
-from orchestrator.studies.avalanche.study import AvalancheStudy, ContactSpec, ensure_packing, load_study, packing_state_file, release_case
+from orchestrator.studies.avalanche.study import AvalancheStudy, ContactSpec, packing_case, load_study, packing_state_file, release_case
 from orchestrator.case import with_engine  # noqa: E402
 from orchestrator.studies.collapse.spec import load_collapse
 from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
 from orchestrator.studies.collapse.spec import release_case as collapse_release_case  # noqa: E402
 from orchestrator.case import with_engine as collapse_with_engine  # noqa: E402
 from orchestrator.engines.liggghts import adapter as liggghts  # noqa: E402
-from orchestrator.engines.mpi import MPI_ENV, default_grid  # noqa: E402
+from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 from orchestrator.runner import ensure_run  # noqa: E402
 from orchestrator.runner import RESULTS, run_case  # noqa: E402
@@ -84,18 +84,9 @@ def loop_time(rundir: Path, engine: str) -> tuple[float, int]:
     return sum(float(s) for s, _ in runs), sum(int(n) for _, n in runs)
 
 
-def with_processes(processes: int, action):
-    """Run `action()` with LIGGGHTS on `processes` MPI ranks, the box split across the flow."""
-    previous = os.environ.get(MPI_ENV)
-    os.environ[MPI_ENV] = str(processes)
-    try:
-        with default_grid("1 * 1"):
-            return action()
-    finally:
-        if previous is None:
-            os.environ.pop(MPI_ENV, None)
-        else:
-            os.environ[MPI_ENV] = previous
+def across_the_flow(processes: int) -> RunOptions:
+    """LIGGGHTS on `processes` MPI ranks, the box split across the flow."""
+    return RunOptions(mpi_processes=processes, default_grid="1 * 1")
 
 
 def row(label: dict[str, object], rundir: Path, engine: str, spheres: int, dt: float) -> dict[str, object]:
@@ -107,14 +98,14 @@ def row(label: dict[str, object], rundir: Path, engine: str, spheres: int, dt: f
     return result
 
 
-def release_window(study: AvalancheStudy, scratch: Path, name: str, processes: int) -> tuple[Path, int, float]:
+def release_window(study: AvalancheStudy, scratch: Path, name: str, processes: int, adapter: object = None) -> tuple[Path, int, float]:
     """Run the release window of `study` (packing cached in scratch/packings); (run dir, spheres, Δt)."""
-    packing_dir, _ = ensure_packing(study, scratch / "packings")
+    packing_dir, _ = ensure_run(packing_case(study), scratch / "packings", "packing", lambda d: packing_state_file(study, d))
     packed = read_results(packing_dir / RESULTS)
     case = release_case(study, packed, packing_state_file(study, packing_dir))
     rundir = scratch / name
     shutil.rmtree(rundir, ignore_errors=True)
-    with_processes(processes, lambda: run_case(case, scratch, rundir))
+    run_case(case, scratch, rundir, adapter=adapter, options=across_the_flow(processes))
     spheres = sum(case.shape(c.shape).clump(case.material(c.material).density).n_spheres for c in case.bodies.clumps)
     return rundir, spheres, physics.schedule(case).dt
 
@@ -137,18 +128,13 @@ def settings(bricks: int, window: float, scratch: Path) -> list[dict[str, object
     """LIGGGHTS skin (largest radii) and output interval on the 4 × 2 × 1 bilinear flow, one process."""
     rows = []
     base = flow_study(bricks, "liggghts", (4, 2, 1), "bilinear", window)
-    default_skin = liggghts.SKIN_RADII
-    try:
-        for skin in (0.5, 1.0, 2.0):
-            liggghts.SKIN_RADII = skin
-            rundir, spheres, dt = release_window(base, scratch, f"skin-{skin}", 1)
-            rows.append(row({"sweep": "settings", "skin_radii": skin, "output_interval": base.release.output_interval}, rundir, "liggghts", spheres, dt))
-    finally:
-        liggghts.SKIN_RADII = default_skin
+    for skin in (0.5, 1.0, 2.0):
+        rundir, spheres, dt = release_window(base, scratch, f"skin-{skin}", 1, adapter=liggghts.LiggghtsAdapter(skin_radii=skin))
+        rows.append(row({"sweep": "settings", "skin_radii": skin, "output_interval": base.release.output_interval}, rundir, "liggghts", spheres, dt))
     for interval in (0.005, 0.001):
         study = base.model_copy(update={"release": base.release.model_copy(update={"output_interval": interval})})
         rundir, spheres, dt = release_window(study, scratch, f"output-{interval}", 1)
-        rows.append(row({"sweep": "settings", "skin_radii": default_skin, "output_interval": interval}, rundir, "liggghts", spheres, dt))
+        rows.append(row({"sweep": "settings", "skin_radii": liggghts.deck.SKIN_RADII, "output_interval": interval}, rundir, "liggghts", spheres, dt))
     return rows
 
 
@@ -166,7 +152,7 @@ def collapse(engines: list[str], processes: list[int], window: float, scratch: P
         for count in processes if engine == "liggghts" else [1]:
             rundir = scratch / f"collapse-{engine}-{count}"
             shutil.rmtree(rundir, ignore_errors=True)
-            with_processes(count, lambda: run_case(case, scratch, rundir))
+            run_case(case, scratch, rundir, options=across_the_flow(count))
             mobile = sum(not s.fixed for s in case.bodies.spheres)
             label = {"sweep": "collapse", "grains": mobile, "glued": len(case.bodies.spheres) - mobile, "processes": count}
             rows.append(row(label, rundir, engine, len(case.bodies.spheres), physics.schedule(case).dt))

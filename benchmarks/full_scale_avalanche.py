@@ -32,7 +32,7 @@ from orchestrator import physics  # noqa: E402
 from orchestrator.case import Case  # noqa: E402
 from orchestrator.studies.avalanche.study import load_study, run_study
 from orchestrator.case import with_engine  # noqa: E402
-from orchestrator.engines.mpi import mpi_processes as liggghts_processes, processor_grid as liggghts_grid  # noqa: E402
+from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 
 STUDY = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
@@ -95,8 +95,8 @@ def main() -> None:
         "front": {key: value for key, value in report.get("front", {}).items() if not isinstance(value, list)},
         "apparent_density": report["packing"]["apparent_density"],
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "python": platform.python_version()},
-        "mpi_processes": liggghts_processes(),
-        "processor_grid": liggghts_grid(),
+        "mpi_processes": RunOptions().processes(),
+        "processor_grid": RunOptions(default_grid="1 * 1").grid(),
     }
     steps = (result["packing"]["steps"] or 0) + (result["release"]["steps"] or 0)
     result["steps_per_s"] = steps / wall if steps else None

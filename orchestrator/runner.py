@@ -14,7 +14,7 @@ from typing import Any, Callable
 
 from orchestrator import __version__, rundir
 from orchestrator.case import Case
-from orchestrator.engines import EngineError, get_adapter
+from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
 from orchestrator.engines.base import ProgressCallback
 from orchestrator.post import summary
 from orchestrator.results import write_results
@@ -35,21 +35,28 @@ def run_case(
     directory: Path,
     progress: ProgressCallback | None = None,
     timeout: float | None = None,
+    adapter: EngineAdapter | None = None,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Run a validated case in `directory` and return the run record (also saved as run.json).
 
     Holds the directory's lock while it runs (rundir.Busy if another process holds it). Raises
-    EngineError (after recording the failure in run.json) when the engine fails.
+    EngineError (after recording the failure in run.json) when the engine fails. `adapter`: an
+    engine adapter set up by the caller (tuning a benchmark varies); default get_adapter(engine,
+    options), options being how the engine runs (MPI processes), never what it computes.
     """
     with rundir.locked(directory, wait=False):
-        return run_locked(case, case_dir, directory, progress, timeout)
+        return run_locked(case, case_dir, directory, progress, timeout, adapter or get_adapter(case.engine.value, options))
 
 
-def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCallback | None, timeout: float | None) -> dict[str, Any]:
+def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCallback | None, timeout: float | None,
+               adapter: EngineAdapter | None = None) -> dict[str, Any]:
     """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
-    adapter = get_adapter(case.engine.value)
+    adapter = adapter or get_adapter(case.engine.value)
     build = rundir.build_stamp(case.engine.value)
-    deck = render_case(case, case_dir, directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    rundir.save_inputs(directory, case)
+    deck = adapter.write_input(case, case_dir, directory)
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
         "kind": "case",
@@ -94,6 +101,7 @@ def ensure_run(
     state_file: Callable[[Path], Path | None] = lambda directory: None,
     progress: Callable[[float, float], None] | None = None,
     timeout: float | None = None,
+    options: RunOptions | None = None,
 ) -> tuple[Path, bool]:
     """Run `case` once under root/<run id>/ and reuse it afterwards. Returns (directory, reused).
 
@@ -111,7 +119,7 @@ def ensure_run(
         if any(entry.name != rundir.LOCK for entry in directory.iterdir()):
             rundir.retire(directory, root)
         try:
-            run_locked(case, root, directory, progress, timeout)
+            run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options))
         except EngineError as error:
             raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
     return directory, False

@@ -19,6 +19,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "orchestrator"
 LAYERS: list[tuple[str, ...]] = [
     # foundations: no import from the package, or only from each other
     ("orchestrator", "orchestrator.engines.registry", "orchestrator.engines.settings", "orchestrator.results", "orchestrator.validation",
+     "orchestrator.figures",
      "orchestrator.bricks", "orchestrator.contact.law", "orchestrator.contact"),
     ("orchestrator.case",),
     ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post"),

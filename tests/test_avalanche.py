@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -98,7 +97,7 @@ def test_flips_are_refused_for_a_random_pour() -> None:
 
 
 @pytest.mark.engine
-def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path) -> None:
     """Bricks (clumps) poured onto mesh walls move the same with bins far larger than LIGGGHTS' own.
 
     LIGGGHTS' bins only sort spheres and triangles before the distance tests, so larger bins (the
@@ -112,8 +111,7 @@ def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path, m
     study = study.model_copy(update={"packing": study.packing.model_copy(update={"settle_time": 0.16})})
     pours = []
     for name, cap in (("own_bins", float("inf")), ("capped_bins", 2e5)):
-        monkeypatch.setattr(liggghts, "MAX_BINS", cap)
-        run_case(packing_case(study), tmp_path, tmp_path / name)
+        run_case(packing_case(study), tmp_path, tmp_path / name, adapter=liggghts.LiggghtsAdapter(max_bins=cap))
         pours.append(read_results(tmp_path / name / RESULTS))
     assert "binsize 0.02" in (tmp_path / "capped_bins" / "in.liggghts").read_text()
     assert "binsize" not in (tmp_path / "own_bins" / "in.liggghts").read_text()

@@ -51,7 +51,7 @@ def test_batched_kabsch_recovers_known_rotations() -> None:
     """The dump reader's batched fit gives back the rotations that placed the template."""
     from scipy.spatial.transform import Rotation
 
-    from orchestrator.engines.liggghts.adapter import kabsch_quaternions
+    from orchestrator.engines.liggghts.dump import kabsch_quaternions
 
     template = BrickClump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1)).centres
     truth = Rotation.random(200, random_state=3)

@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from orchestrator.post import collapse as cm
 from orchestrator.case import CaseError
 from orchestrator.studies.collapse.spec import BED_COVER, level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
 from orchestrator.studies.collapse.study import measure, run_collapse

@@ -18,7 +18,7 @@ def fake_runs(monkeypatch: pytest.MonkeyPatch, law) -> list[float]:
     """Replace the engine runs by `law(mu)` → ΔL/L0; returns the list of μ asked for."""
     asked: list[float] = []
 
-    def run(study, outdir, preparations=None):
+    def run(study, outdir, preparations=None, options=None):
         asked.append(study.contacts.mu)
         assert study.contacts.mu_wall is None  # grain/wall friction follows μ
         return {"runout_over_R0": law(study.contacts.mu), "front": {"at_rest": True}}

@@ -19,10 +19,11 @@ from conftest import free_fall_case, requires_liggghts, requires_yade
 @pytest.mark.engine
 def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
     rundir = tmp_path / "run"
-    deck = render_case(free_fall_case("liggghts"), tmp_path, rundir)
+    case = free_fall_case("liggghts")
+    deck = render_case(case, tmp_path, rundir)
     deck.write_text(deck.read_text().replace("pair_style      gran", "pair_style      grann"))
     with pytest.raises(EngineError) as caught:
-        LiggghtsAdapter().execute(rundir)
+        LiggghtsAdapter().execute(case, rundir)
     message = str(caught.value)
     assert "ERROR" in message and "grann" in message, message
     assert str(deck) in message
@@ -34,21 +35,19 @@ def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
 @pytest.mark.engine
 def test_failing_yade_script_reports_traceback(tmp_path: Path) -> None:
     rundir = tmp_path / "run"
-    script = render_case(free_fall_case("yade"), tmp_path, rundir)
+    case = free_fall_case("yade")
+    script = render_case(case, tmp_path, rundir)
     script.write_text(script.read_text().replace("O.dt = DT", "O.dt = DT / undefined_name"))
     with pytest.raises(EngineError) as caught:
-        YadeAdapter().execute(rundir)
+        YadeAdapter().execute(case, rundir)
     assert "undefined_name" in str(caught.value)
     assert script.exists() and (rundir / "engine.log").exists()
 
 
-def test_missing_engine_binary_is_a_clear_error_and_the_run_is_recorded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from orchestrator import runner
-
-    monkeypatch.setattr(runner, "get_adapter", lambda name: LiggghtsAdapter(executable="liggghts-not-installed"))
+def test_missing_engine_binary_is_a_clear_error_and_the_run_is_recorded(tmp_path: Path) -> None:
     rundir = tmp_path / "run"
     with pytest.raises(EngineError, match=r"'liggghts-not-installed' was not found on PATH; install it with: apt-get"):
-        run_case(free_fall_case("liggghts"), tmp_path, rundir)
+        run_case(free_fall_case("liggghts"), tmp_path, rundir, adapter=LiggghtsAdapter(executable="liggghts-not-installed"))
     record = json.loads((rundir / RUN_RECORD).read_text())
     assert record["status"] == "failed"
     assert (rundir / "in.liggghts").exists(), "the deck must survive a failed run"

@@ -76,7 +76,8 @@ def test_both_engines_give_one_layout_and_one_trajectory(tmp_path: Path) -> None
 @pytest.mark.engine
 def test_binary_dump_keeps_every_whole_frame_and_drops_a_cut_one(tmp_path: Path) -> None:
     """LIGGGHTS writes a binary dump; a frame cut short (engine killed mid-write) is dropped, the rest read."""
-    from orchestrator.engines.liggghts.adapter import DUMP_NAME, SPHERE_COLUMNS, read_binary_dump
+    from orchestrator.engines.liggghts.deck import DUMP_NAME, SPHERE_COLUMNS
+    from orchestrator.engines.liggghts.dump import read_binary_dump
 
     run_case(free_fall_case("liggghts"), tmp_path, tmp_path / "run")
     path = tmp_path / "run" / DUMP_NAME

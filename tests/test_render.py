@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import json
 import math
 from pathlib import Path
 
@@ -13,28 +14,32 @@ import pytest
 from orchestrator.case import CaseError, parse_case
 from orchestrator.engines.yade.materials import series, split_in_series
 from orchestrator.physics import pair_constants
-from orchestrator.engines.templating import environment, py_literal
+from orchestrator.engines.templating import data_literal, environment
 from orchestrator.case import with_engine
 from orchestrator.runner import render_case
 
 from conftest import sliding_case
 
 
-@pytest.mark.parametrize("value", [0.1, 1e-17, 123456.789, -2.5e300, 0, 7, "it's \"quoted\"\nnewline", ("a", 1.5), [1, [2, 3]], {"k": None, "b": True}])
-def test_py_literal_round_trips(value: object) -> None:
-    assert ast.literal_eval(py_literal(value)) == (list(value) if isinstance(value, list) else value)
+@pytest.mark.parametrize("value", [0.1, 1e-17, 123456.789, -2.5e300, 0, 7, "it's \"quoted\"\nnewline", ["a", 1.5], [1, [2, 3]], {"k": None, "b": True}])
+def test_deck_data_round_trips_as_data(value: object) -> None:
+    """The |data filter: JSON in a Python string literal; parsing it gives the value back, exactly."""
+    literal = data_literal(value)
+    assert isinstance(ast.parse(literal, mode="eval").body, ast.Constant)  # one string constant: no code
+    assert json.loads(ast.literal_eval(literal)) == value
 
 
-def test_py_literal_refuses_non_finite_numbers() -> None:
+def test_deck_data_refuses_non_finite_numbers() -> None:
     with pytest.raises(ValueError):
-        py_literal(math.nan)
+        data_literal({"dt": math.nan})
 
 
-def test_yade_template_cannot_emit_a_raw_string() -> None:
-    template = environment("yade").from_string("x = {{ value }}")
-    with pytest.raises(jinja2.TemplateError, match=r"\|py"):
+@pytest.mark.parametrize("engine", ["liggghts", "yade"])
+def test_no_template_can_emit_raw_text(engine: str) -> None:
+    template = environment(engine).from_string("x = {{ value }}")
+    with pytest.raises(jinja2.TemplateError, match=r"\|data"):
         template.render(value="__import__('os').system('true')")
-    assert template.render(value=py_literal("a'b")) == "x = \"a'b\""
+    assert template.render(value="case_1") == "x = case_1"  # a safe deck word
 
 
 def test_liggghts_template_refuses_unsafe_text() -> None:
@@ -50,21 +55,19 @@ def test_render_is_deterministic_and_exact(engine: str, tmp_path: Path) -> None:
     second = render_case(case, tmp_path, tmp_path / "b").read_text()
     assert first == second
     # LIGGGHTS takes the pair value; YADE twice it per material (series combination of two equal halves).
-    assert ("kn peratomtypepair 2 100000.0 " in first) if engine == "liggghts" else ("'kn': 200000.0" in first)
+    assert ("kn peratomtypepair 2 100000.0 " in first) if engine == "liggghts" else ('"kn":200000.0' in first)
 
 
 def test_yade_script_is_valid_python_holding_the_case_values(tmp_path: Path) -> None:
     case = sliding_case("yade")
     script = render_case(case, tmp_path, tmp_path / "run").read_text()
     tree = ast.parse(script)
-    constants = {
-        node.targets[0].id: ast.literal_eval(node.value)
-        for node in tree.body
-        if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name) and node.targets[0].id.isupper()
-        and isinstance(node.value, (ast.Constant, ast.List, ast.Tuple, ast.Dict, ast.UnaryOp))
-    }
-    assert constants["SPHERES"][0][1] == case.bodies.spheres[0].radius
-    assert constants["FRICTION"][0][2] == pytest.approx(0.2)
+    # The case's values are one JSON document, the argument of the only json.loads call.
+    calls = [node for node in ast.walk(tree) if isinstance(node, ast.Call) and getattr(node.func, "attr", None) == "loads"]
+    assert len(calls) == 1 and isinstance(calls[0].args[0], ast.Constant)
+    data = json.loads(calls[0].args[0].value)
+    assert data["spheres"][0][1] == case.bodies.spheres[0].radius
+    assert data["friction"][0][2] == pytest.approx(0.2)
 
 
 def test_yade_series_split_reproduces_every_pair() -> None:
@@ -120,21 +123,20 @@ def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
 
 
 def test_mpi_settings_reach_the_command_and_the_deck(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """DEMORCH_LIGGGHTS_MPI / _GRID change how LIGGGHTS is launched and split, not the case."""
-    from orchestrator.engines import get_adapter
-    from orchestrator.engines.mpi import default_grid
+    """MPI processes and the processor grid change how LIGGGHTS is launched and split, not the case.
+    Precedence: the explicit option, then the environment, then a study's default split."""
+    from orchestrator.engines import RunOptions, get_adapter
 
     monkeypatch.setenv("DEMORCH_LIGGGHTS_MPI", "2")
     monkeypatch.delenv("DEMORCH_LIGGGHTS_GRID", raising=False)
-    with default_grid("1 * 1"):
-        adapter = get_adapter("liggghts")
-        deck = adapter.write_input(sliding_case("liggghts"), tmp_path, tmp_path)
+    adapter = get_adapter("liggghts", RunOptions(default_grid="1 * 1"))
+    deck = adapter.write_input(sliding_case("liggghts"), tmp_path, tmp_path)
     assert "processors      1 * 1" in deck.read_text()
     command = adapter.command(deck)
     assert command[command.index("-np") + 1] == "2"
+    assert get_adapter("liggghts", RunOptions(mpi_processes=3)).mpi_processes == 3  # the option beats the environment
     monkeypatch.setenv("DEMORCH_LIGGGHTS_GRID", "2 1 1")
-    with default_grid("1 * 1"):  # the user's grid wins over a study's default
-        assert get_adapter("liggghts").processor_grid == "2 1 1"
+    assert get_adapter("liggghts", RunOptions(default_grid="1 * 1")).processor_grid == "2 1 1"  # the user's grid wins
 
 
 @pytest.mark.parametrize(("variable", "value"), [("DEMORCH_LIGGGHTS_MPI", "two"), ("DEMORCH_LIGGGHTS_MPI", "0"), ("DEMORCH_LIGGGHTS_GRID", "1 *"), ("DEMORCH_LIGGGHTS_GRID", "1 x 1")])
@@ -157,7 +159,7 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None
     from orchestrator.case import Domain
     from orchestrator.engines.liggghts import adapter as liggghts
 
-    MAX_BINS = liggghts.MAX_BINS
+    MAX_BINS = liggghts.deck.MAX_BINS
     from orchestrator.results import read_results
     from orchestrator.runner import RESULTS, run_case
 

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.case import Case, parse_case
 from orchestrator.post.summary import kinetic_energy
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case

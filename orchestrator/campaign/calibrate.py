@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Callable, Literal
@@ -251,13 +250,10 @@ def _simplex(centre: np.ndarray, step: float) -> np.ndarray:
 
 
 def plot_convergence(evaluations: list[dict[str, Any]], spec: CalibrationSpec, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from orchestrator.figures import subplots
 
     errors = np.array([e["error"] for e in evaluations])
-    fig, axes = plt.subplots(1, 1 + len(spec.parameters), figsize=(4 * (1 + len(spec.parameters)), 3.5), constrained_layout=True)
+    fig, axes = subplots(1, 1 + len(spec.parameters), figsize=(4 * (1 + len(spec.parameters)), 3.5), constrained_layout=True)
     axes[0].semilogy(np.arange(1, len(errors) + 1), errors, ".", color="grey", label="evaluation")
     axes[0].semilogy(np.arange(1, len(errors) + 1), np.minimum.accumulate(errors), color="tab:red", label="best so far")
     axes[0].set_xlabel("evaluation")
@@ -268,4 +264,3 @@ def plot_convergence(evaluations: list[dict[str, Any]], spec: CalibrationSpec, p
         ax.set_xlabel("evaluation")
         ax.set_ylabel(parameter.path)
     fig.savefig(path, dpi=110)
-    plt.close(fig)

@@ -11,6 +11,7 @@ process (PR_SET_PDEATHSIG) and the lock dies with them, so the next launch finds
 from __future__ import annotations
 
 import concurrent.futures as futures
+import dataclasses
 import multiprocessing
 import time
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from orchestrator import rundir
 from orchestrator.campaign import store
 from orchestrator.campaign.spec import base_kind, expand, load_campaign
 from orchestrator.case import Case, CaseError
+from orchestrator.engines import RunOptions, get_adapter
 from orchestrator.engines.base import EngineError, die_with_parent
 from orchestrator.rundir import RUN_RECORD, write_json_atomic
 from orchestrator.runner import RESULTS, run_locked
@@ -30,12 +32,14 @@ RERUN = ("pending", "incomplete", "stale")  # what a launch runs; failed ones on
 
 
 def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case",
-            rerun_failed: bool = False) -> dict[str, Any]:
+            rerun_failed: bool = False, options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Run one case or study point in `directory` (any process); never raises for an engine or case failure.
 
     Returns {"run_id", "status": completed | failed | skipped, ...}; skipped: another process holds
-    the point or already completed it (or it failed before and rerun_failed is off).
+    the point or already completed it (or it failed before and rerun_failed is off). options: the
+    launch's RunOptions as a dict (how engines run: MPI processes), passed to every engine.
     """
+    run_options = RunOptions(**(options or {}))
     path = Path(directory)
     started = time.perf_counter()
     try:
@@ -45,17 +49,19 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
                 return {"run_id": path.name, "status": "skipped", "reason": state}
             if any(entry.name != rundir.LOCK for entry in path.iterdir()):
                 rundir.retire(path, path.parent.parent)
-            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started)
+            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options)
     except rundir.Busy:
         return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
 
 
-def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float) -> dict[str, Any]:
+def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float,
+                    options: RunOptions) -> dict[str, Any]:
     try:
         if kind == "case":
-            record = run_locked(Case.model_validate_json(point_json), case_dir, path, None, timeout)
+            case = Case.model_validate_json(point_json)
+            record = run_locked(case, case_dir, path, None, timeout, get_adapter(case.engine.value, options))
         else:
-            record = perform_study(kind, point_json, path, started, timeout)
+            record = perform_study(kind, point_json, path, started, timeout, options)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
         summary = error.summary if isinstance(error, EngineError) else str(error)
@@ -65,7 +71,8 @@ def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float 
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
 
 
-def perform_study(kind_name: str, study_json: str, path: Path, started: float, timeout: float | None) -> dict[str, Any]:
+def perform_study(kind_name: str, study_json: str, path: Path, started: float, timeout: float | None,
+                  options: RunOptions | None = None) -> dict[str, Any]:
     """A study as one campaign run, with a summary run.json (and the study as its case.json).
 
     The study's preparation (an avalanche's packing, a collapse's rained column) is shared by every
@@ -77,7 +84,7 @@ def perform_study(kind_name: str, study_json: str, path: Path, started: float, t
     study = kind.model.model_validate_json(study_json)
     build = rundir.build_stamp(study.engine.value)
     rundir.save_inputs(path, study)
-    report = kind.run(study, path, shared=path.parent.parent / kind.shared_dir, timeout=timeout)
+    report = kind.run(study, path, shared=path.parent.parent / kind.shared_dir, timeout=timeout, options=options)
     release = rundir.read_json(path / "run" / RUN_RECORD) or {}
     shared = report[kind.preparation]
     record = {
@@ -131,6 +138,7 @@ class Plan:
     to_run: list[str]
     skipped: dict[str, str]  # run id -> why (completed, running elsewhere, failed)
     rerun_failed: bool = False
+    options: RunOptions = field(default_factory=RunOptions)
 
 
 def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
@@ -155,9 +163,10 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
     return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
 
 
-def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str, bool]:
+def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str, bool, dict[str, Any]]:
     directory = str(store.run_dir(plan.campaign_dir, identifier))
-    return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind, plan.rerun_failed)
+    return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind, plan.rerun_failed,
+            plan.options.as_dict())
 
 
 def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:
@@ -193,8 +202,10 @@ def run_campaign(
     rerun_failed: bool = False,
     dask_address: str | None = None,
     on_update: Callable[[Counts, dict[str, Any] | None], None] | None = None,
+    options: RunOptions | None = None,
 ) -> Counts:
-    plan = plan_campaign(campaign_file, campaign_dir, rerun_failed)
+    """Run every pending point (options: how the engines run, e.g. MPI processes per run)."""
+    plan = dataclasses.replace(plan_campaign(campaign_file, campaign_dir, rerun_failed), options=options or RunOptions())
     counts = Counts(total=len(plan.points), skipped=len(plan.skipped), running=min(jobs, len(plan.to_run)))
     if on_update:
         on_update(counts, None)

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from orchestrator.figures import subplots
+import numpy as np
+import pandas as pd
 
 
 def response_surface(table: pd.DataFrame, x_name: str, y_name: str, metric: str, path: Path) -> None:
@@ -17,7 +14,7 @@ def response_surface(table: pd.DataFrame, x_name: str, y_name: str, metric: str,
     x_col, y_col, z_col = f"param.{x_name}", f"param.{y_name}", f"metric.{metric}"
     done = table[table["status"] == "completed"]
     x, y, z = (done[c].to_numpy(dtype=float) for c in (x_col, y_col, z_col))
-    fig, ax = plt.subplots(figsize=(6, 5), constrained_layout=True)
+    fig, ax = subplots(figsize=(6, 5), constrained_layout=True)
     if len(np.unique(x)) > 1 and len(np.unique(y)) > 1 and len(x) >= 3:
         filled = ax.tricontourf(x, y, z, levels=12, cmap="viridis")
         ax.tricontour(x, y, z, levels=12, colors="k", linewidths=0.4)
@@ -28,4 +25,3 @@ def response_surface(table: pd.DataFrame, x_name: str, y_name: str, metric: str,
     ax.set_ylabel(y_name)
     ax.set_title(f"{metric} over ({x_name}, {y_name})")
     fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -18,11 +18,10 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 from scipy.stats import qmc
 
-from orchestrator.case import Case, CaseError, Name, Strict, parse_case, parse_model, read_yaml
+from orchestrator.case import CaseError, Name, Strict, parse_case, parse_model, read_yaml
 from orchestrator.engines import Engine
 from orchestrator.studies.registry import detect, study_kind
 

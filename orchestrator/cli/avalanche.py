@@ -10,7 +10,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from orchestrator.case import CaseError, with_engine
-from orchestrator.cli.common import REPO_ROOT, console, fail, progress_callback
+from orchestrator.cli.common import REPO_ROOT, console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS
@@ -65,7 +65,7 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
                 task = progress.add_task("starting", total=1.0, stage=name)
                 return progress_callback(progress, task)
 
-            report = run_study(study, outdir, progress=stage, packings=packings)
+            report = run_study(study, outdir, progress=stage, packings=packings, options=run_options())
     except CaseError as error:
         fail(str(error))
     except EngineError as error:

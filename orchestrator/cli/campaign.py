@@ -11,7 +11,7 @@ import click
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from orchestrator.case import CaseError
-from orchestrator.cli.common import console, errors, fail
+from orchestrator.cli.common import console, errors, fail, run_options
 
 
 @click.group()
@@ -57,7 +57,7 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
                 failures.append(f"{summary['run_id']}: {summary.get('error', '')}")
 
         try:
-            counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update)
+            counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update, options=run_options())
         except CaseError as error:
             fail(str(error))
     for line in failures:

@@ -12,7 +12,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from orchestrator.case import CaseError
-from orchestrator.cli.common import console, fail, progress_callback
+from orchestrator.cli.common import console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
 
 
@@ -75,7 +75,7 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
         study = with_engine(load_collapse(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
         with _progress() as progress:
-            report = run_collapse(study, outdir, progress=_stages(progress), preparations=preparations)
+            report = run_collapse(study, outdir, progress=_stages(progress), preparations=preparations, options=run_options())
         figure = write_collapse_report(outdir, report)
     except CaseError as error:
         fail(str(error))
@@ -104,10 +104,10 @@ def calibrate_command(study_path: Path, engine: str | None, output: Path | None,
             raise CaseError(f"channel.slope_deg: the scaling law is for a horizontal collapse; allowed: 0 (got {study.channel.slope_deg})")
         outdir = output or Path("runs") / f"calibration-{study.name}-{study.engine.value}"
         result = calibrate_mu(study, outdir, tuple(mu_range), max_runs=max_runs,
-                              on_run=lambda mu, ratio: console.print(f"μ = {mu:.4f}: ΔL/L0 = {ratio:.3f}"))
+                              on_run=lambda mu, ratio: console.print(f"μ = {mu:.4f}: ΔL/L0 = {ratio:.3f}"), options=run_options())
         if check_engine and check_engine != study.engine.value:
             other = with_engine(with_mu(study, result["mu"]), check_engine)
-            report = run_collapse(other, outdir / f"check-{check_engine}", preparations=outdir / "preparations")
+            report = run_collapse(other, outdir / f"check-{check_engine}", preparations=outdir / "preparations", options=run_options())
             ratio = report["runout_over_R0"]
             result["check"] = {"engine": check_engine, "runout_over_R0": ratio, "relative_difference": ratio / result["runout_over_R0"] - 1.0}
             (outdir / "calibration.json").write_text(json.dumps(result, indent=2) + "\n")

@@ -7,9 +7,19 @@ import sys
 from pathlib import Path
 from typing import Any, Callable
 
+import click
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
+
+from orchestrator.engines import RunOptions
+
+def run_options() -> RunOptions:
+    """How engines run (`demorch --mpi N`), kept by the main command for its subcommands."""
+    context = click.get_current_context(silent=True)
+    options = context.find_root().obj if context is not None else None
+    return options if isinstance(options, RunOptions) else RunOptions()
+
 
 console = Console(stderr=False)
 errors = Console(stderr=True)

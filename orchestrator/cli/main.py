@@ -7,7 +7,6 @@ avalanche (avalanche, demo), campaign, collapse; common holds what they share.
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -21,9 +20,9 @@ from orchestrator.case import CaseError, load_case, with_engine
 from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
-from orchestrator.cli.common import console, default_rundir, fail, metrics_table, progress_callback
+from orchestrator.cli.common import console, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
-from orchestrator.engines.mpi import MPI_ENV
+from orchestrator.engines.options import MPI_ENV, RunOptions
 from orchestrator.post import summary as metrics
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, render_case, run_case
@@ -45,7 +44,7 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
             transient=False,
         ) as progress:
             task = progress.add_task("starting", total=case.time.duration)
-            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout)
+            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout, options=run_options())
     except CaseError as error:
         fail(str(error))
     except EngineError as error:
@@ -58,11 +57,12 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="dem-orchestrator")
 @click.option("--mpi", type=click.IntRange(1, 256), default=None, metavar="N",
-              help=f"Run each LIGGGHTS engine as `mpirun -np N` (same as {MPI_ENV}=N; cases and results do not change).")
-def main(mpi: int | None) -> None:
-    """Run LIGGGHTS and YADE from one validated case file."""
-    if mpi is not None:
-        os.environ[MPI_ENV] = str(mpi)
+              help=f"Run each engine that can split a run over MPI (LIGGGHTS) as `mpirun -np N` (default: ${MPI_ENV}, else 1; "
+                   "cases and results do not change).")
+@click.pass_context
+def main(context: click.Context, mpi: int | None) -> None:
+    """Run LIGGGHTS, YADE and cocd from one validated case file."""
+    context.obj = RunOptions(mpi_processes=mpi)
 
 
 @main.command()

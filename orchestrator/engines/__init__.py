@@ -6,6 +6,7 @@ Import adapters through `get_adapter(name)`; outside this package nothing names 
 from __future__ import annotations
 
 from orchestrator.engines.base import ContactBuildError, EngineAdapter, EngineError, EngineInfo
+from orchestrator.engines.options import RunOptions
 from orchestrator.engines.registry import (
     DEFAULT_ENGINE,
     ENGINE_NAMES,
@@ -19,10 +20,10 @@ from orchestrator.engines.registry import (
 )
 
 
-def get_adapter(name: str) -> EngineAdapter:
-    """The adapter of engine `name`, set up from the environment (MPI processes, say)."""
-    return adapter_class(name).from_environment()
+def get_adapter(name: str, options: RunOptions | None = None) -> EngineAdapter:
+    """The adapter of engine `name`, set up with the run options (MPI processes, say)."""
+    return adapter_class(name).from_options(options or RunOptions())
 
 
 __all__ = ["ContactBuildError", "DEFAULT_ENGINE", "ENGINE_NAMES", "ENGINES", "Capabilities", "Engine", "EngineAdapter", "EngineError", "EngineInfo",
-           "UnknownEngine", "adapter_class", "capabilities", "engines_with", "get_adapter"]
+           "RunOptions", "UnknownEngine", "adapter_class", "capabilities", "engines_with", "get_adapter"]

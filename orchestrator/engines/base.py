@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from orchestrator.case import Case
+    from orchestrator.engines.options import RunOptions
 from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
@@ -61,8 +62,8 @@ class EngineAdapter(Protocol):
     name: str
 
     @classmethod
-    def from_environment(cls) -> "EngineAdapter":
-        """The adapter with its settings from the environment (MPI processes, say)."""
+    def from_options(cls, options: RunOptions) -> "EngineAdapter":
+        """The adapter set up with the run options (MPI processes, say)."""
         ...
 
     def info(self) -> EngineInfo: ...
@@ -82,12 +83,12 @@ class EngineAdapter(Protocol):
 
 
 class AdapterDefaults:
-    """What most adapters share: no settings from the environment, the templates as build inputs."""
+    """What most adapters share: no run options, the templates as build inputs."""
 
     name: str
 
     @classmethod
-    def from_environment(cls) -> "AdapterDefaults":
+    def from_options(cls, options: RunOptions) -> "AdapterDefaults":
         return cls()
 
     def build_inputs(self) -> dict[str, str]:

@@ -10,6 +10,7 @@ import numpy as np
 
 from orchestrator import geometry, physics
 from orchestrator.case import Case, Domain
+from orchestrator.results import Trajectory
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,10 @@ def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float | None]
         return None
     every, after = checks
     rest = case.time.stop_at_rest
-    return {"every": every, "after": after, "speed": rest.speed, "mass": moving_mass(case), "stray_fraction": rest.stray_fraction}
+    # The first check: at `after`, or at the last wall removal if later (a release's trap opening).
+    first = max([after, *physics.removal_steps(case, plan).values()])
+    return {"every": every, "after": after, "first": first, "speed": rest.speed, "mass": moving_mass(case),
+            "stray_fraction": rest.stray_fraction}
 
 
 def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
@@ -122,3 +126,27 @@ def package_version(package: str) -> str | None:
     except (OSError, subprocess.TimeoutExpired):
         return None
     return result.stdout.strip() or None
+
+
+def frame_stream_trajectory(case: Case, rundir: Path, frames_name: str, deck: Path, engine: str, orientation_tracked: bool) -> Trajectory:
+    """The Trajectory of a run whose engine appended (time, (bodies, 16) rows) frames with numpy.save:
+    id, mass, radius, position, velocity, angular velocity, orientation (w, x, y, z)."""
+    from orchestrator.engines.base import EngineError
+
+    times, rows = read_frames(rundir / frames_name)
+    if not rows:
+        raise EngineError(f"{engine} wrote no frames", deck, rundir / "engine.log")
+    stack = np.stack(rows)
+    return Trajectory(
+        time=np.asarray(times),
+        ids=stack[0, :, 0].astype(np.int64),
+        material=body_materials(case),
+        mass=stack[0, :, 1].copy(),
+        radius=stack[0, :, 2].copy(),
+        inertia=body_inertia(case),
+        position=stack[:, :, 3:6],
+        velocity=stack[:, :, 6:9],
+        angular_velocity=stack[:, :, 9:12],
+        orientation=stack[:, :, 12:16],
+        attrs={"orientation_tracked": orientation_tracked, **at_rest_attrs(rundir, physics.schedule(case).dt)},
+    )

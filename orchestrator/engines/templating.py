@@ -1,14 +1,18 @@
-"""Jinja2 rendering with one rule per engine about what may reach the generated text.
+"""One rendering path for every engine's deck: Jinja2 templates whose values arrive as data.
 
-YADE scripts are Python, so every value must arrive as a Python literal made by `py_literal`:
-the environment's `finalize` hook refuses anything else, which makes template injection from a
-case file impossible even if a template forgets a filter. LIGGGHTS decks accept numbers and
-names that match the case's strict name pattern only.
+A rendered deck is a file to read, edit and run by hand (`liggghts -in in.liggghts`,
+`yade -x -n script.py`). Every value printed into it passes one `finalize`: a number as its exact
+repr (a non-finite one is refused), text only when it is a safe deck word (the case's strict names,
+file names: no newline, quote, `$`, `#` or `&`); anything else is a template error. Structured data
+enters through the `data` filter: one JSON document written as a Python string literal, which a
+YADE script parses with json.loads. So a value from a case file is data in every deck, never code,
+and no engine has safe-rendering code of its own.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 import re
@@ -20,53 +24,16 @@ import jinja2
 
 PACKAGED_TEMPLATES = Path(__file__).resolve().parents[2] / "templates"
 
+_SAFE_DECK_WORD = re.compile(r"^[A-Za-z0-9_./+\- :]*$")  # no newline, $, #, &, quotes
+
 
 def template_root() -> Path:
     """$DEMORCH_TEMPLATES (a user's own copy of the deck templates), else the project's templates/."""
     return Path(os.environ.get("DEMORCH_TEMPLATES", PACKAGED_TEMPLATES))
 
-_SAFE_DECK_WORD = re.compile(r"^[A-Za-z0-9_./+\- :]*$")  # no newline, $, #, &, quotes
-
-
-class PyLiteral(str):
-    """Text known to be a Python literal produced by `py_literal`."""
-
-
-def py_literal(value: Any) -> PyLiteral:
-    """Render data as a Python literal (numbers round-trip exactly via repr)."""
-    if isinstance(value, PyLiteral):
-        return value
-    if value is None or isinstance(value, bool):
-        return PyLiteral(repr(value))
-    if isinstance(value, int):
-        return PyLiteral(repr(value))
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            raise ValueError(f"refusing to render a non-finite number {value!r}")
-        return PyLiteral(repr(value))
-    if isinstance(value, str):
-        return PyLiteral(repr(value))
-    if isinstance(value, (list, tuple)):
-        items = ", ".join(py_literal(v) for v in value)
-        return PyLiteral(f"[{items}]" if isinstance(value, list) else f"({items}{',' if len(value) == 1 else ''})")
-    if isinstance(value, dict):
-        items = ", ".join(f"{py_literal(k)}: {py_literal(v)}" for k, v in value.items())
-        return PyLiteral("{" + items + "}")
-    if hasattr(value, "item"):  # numpy scalar
-        return py_literal(value.item())
-    raise TypeError(f"cannot render {type(value).__name__} into a YADE script")
-
-
-def _yade_finalize(value: Any) -> str:
-    if isinstance(value, PyLiteral):
-        return value
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return py_literal(value)
-    raise jinja2.TemplateError(f"YADE template emitted a raw value {value!r}: pass it through |py")
-
 
 def deck_number(value: Any) -> str:
-    """A number for a LIGGGHTS deck, with full precision."""
+    """A number for a deck, with full precision."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError(f"expected a number, got {value!r}")
     if not math.isfinite(value):
@@ -74,12 +41,35 @@ def deck_number(value: Any) -> str:
     return repr(value) if isinstance(value, float) else str(value)
 
 
-def _liggghts_finalize(value: Any) -> str:
+class DataLiteral(str):
+    """A Python string literal holding a JSON document, made by `data_literal`."""
+
+
+def data_literal(value: Any) -> DataLiteral:
+    """`value` as JSON (exact floats; NaN and infinity refused) inside a Python string literal."""
+    try:
+        text = json.dumps(value, allow_nan=False, sort_keys=True, separators=(",", ":"), default=_plain)
+    except ValueError as error:
+        raise ValueError(f"refusing to render deck data: {error}") from None
+    return DataLiteral(repr(text))
+
+
+def _plain(value: Any) -> Any:
+    if hasattr(value, "item"):  # numpy scalar
+        return value.item()
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"cannot render {type(value).__name__} into a deck")
+
+
+def _finalize(value: Any) -> str:
+    if isinstance(value, DataLiteral):
+        return value
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         return deck_number(value)
     text = str(value)
     if isinstance(value, str) and not _SAFE_DECK_WORD.match(text):
-        raise jinja2.TemplateError(f"LIGGGHTS template emitted unsafe text {text!r}")
+        raise jinja2.TemplateError(f"a template emitted unsafe text {text!r}: pass data through |data")
     return text
 
 
@@ -89,7 +79,6 @@ def environment(engine: str) -> jinja2.Environment:
 
 @lru_cache(maxsize=None)
 def _environment(engine: str, root: Path) -> jinja2.Environment:
-    finalize = _yade_finalize if engine == "yade" else _liggghts_finalize
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(root / engine)),
         undefined=jinja2.StrictUndefined,
@@ -97,10 +86,10 @@ def _environment(engine: str, root: Path) -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
         autoescape=False,
-        finalize=finalize,
+        finalize=_finalize,
     )
-    env.filters["py"] = py_literal
     env.filters["num"] = deck_number
+    env.filters["data"] = data_literal
     return env
 
 

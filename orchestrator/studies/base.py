@@ -13,7 +13,7 @@ is measured; this module does the rest the same way for all of them:
 
 from __future__ import annotations
 
-import contextlib
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any, Callable, ClassVar
@@ -22,7 +22,7 @@ import numpy as np
 from pydantic import BaseModel
 
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
-from orchestrator.engines.mpi import default_grid
+from orchestrator.engines import RunOptions
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, ensure_run, run_case
 
@@ -70,15 +70,15 @@ class StudyKind:
         return self.parse(read_yaml(path, f"{self.name} study"), str(path))
 
     def run(self, study: Any, outdir: Path, progress: StageProgress | None = None, shared: Path | None = None,
-            timeout: float | None = None) -> dict[str, Any]:
-        """Prepare (or reuse the preparation in `shared`), release, measure; returns the report."""
-        grid = default_grid(self.processor_grid) if self.processor_grid else contextlib.nullcontext()
-        with grid:
-            return run_study(self, study, outdir, progress, shared, timeout)
+            timeout: float | None = None, options: RunOptions | None = None) -> dict[str, Any]:
+        """Prepare (or reuse the preparation in `shared`), release, measure; returns the report.
+        options: how the engines run (the kind's processor_grid is the default split)."""
+        options = dataclasses.replace(options or RunOptions(), default_grid=self.processor_grid)
+        return run_study(self, study, outdir, progress, shared, timeout, options)
 
 
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
-              timeout: float | None) -> dict[str, Any]:
+              timeout: float | None, options: RunOptions) -> dict[str, Any]:
     outdir.mkdir(parents=True, exist_ok=True)
     release_dir = outdir / RELEASE_DIR
     record = outdir / f"{kind.preparation}.json"
@@ -87,13 +87,13 @@ def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress
         root = shared if shared is not None else outdir.resolve().parent / kind.shared_dir
         prepared = kind.preparation_case(study)
         directory, reused = ensure_run(prepared, root, kind.preparation, lambda d: kind.state_file(study, d),
-                                       progress(kind.preparation) if progress else None, timeout)
+                                       progress(kind.preparation) if progress else None, timeout, options)
         packed = read_results(directory / RESULTS)
         if not np.isfinite(packed.position[-1]).all():
             raise CaseError(f"{kind.preparation} {directory}: {kind.lost_bodies}")
         record.write_text(json.dumps({"directory": str(directory), "reused": reused}, indent=2) + "\n")
         release = kind.release_case(study, prepared, packed, kind.state_file(study, directory))
-        run_case(release, outdir, release_dir, progress=progress("release") if progress else None, timeout=timeout)
+        run_case(release, outdir, release_dir, progress=progress("release") if progress else None, timeout=timeout, options=options)
     trajectory = read_results(release_dir / RESULTS)
     report, arrays = kind.measure(study, trajectory, release_dir)
     shared_record = json.loads(record.read_text()) if record.exists() else {}

@@ -52,10 +52,9 @@ def write_frame(stream, scene: Scene, now: float) -> None:
     stream.flush()
 
 
-def at_rest(scene: Scene, rest: dict | None, n: int, last_stage: int) -> bool:
-    """The case's time.stop_at_rest, checked as the other engines do (see the LIGGGHTS deck)."""
-    first_check = max(rest["after"], last_stage) if rest else 0
-    if not rest or n < first_check or (n - first_check) % rest["every"]:
+def at_rest(scene: Scene, rest: dict | None, n: int) -> bool:
+    """The case's time.stop_at_rest at the steps the orchestrator chose (first check, period)."""
+    if not rest or n < rest["first"] or (n - rest["first"]) % rest["every"]:
         return False
     moving = ~scene.fixed
     squared = np.sum(scene.velocity[moving] ** 2, axis=1)
@@ -78,7 +77,6 @@ def main(deck_path: str) -> None:
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
             removals.setdefault(int(wall["remove_step"]), []).append(k)
-    last_stage = max(removals, default=0)
     stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
     started = time.perf_counter()
     with open(deck["frames"], "wb") as frames:
@@ -101,7 +99,7 @@ def main(deck_path: str) -> None:
             if n % every == 0:
                 write_frame(frames, scene, n * dt)
                 print(f"DEMORCH_T {n * dt!r}", flush=True)
-                if at_rest(scene, deck.get("rest"), n, last_stage):
+                if at_rest(scene, deck.get("rest"), n):
                     total = n
                     break
     stats["wall_s"] = time.perf_counter() - started

@@ -103,20 +103,4 @@ class CocdAdapter(AdapterDefaults):
             raise EngineError("cocd ended without finishing", deck, rundir / "engine.log", tail)
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
-        times, rows = common.read_frames(rundir / FRAMES_NAME)
-        if not rows:
-            raise EngineError("cocd wrote no frames", rundir / DECK_NAME, rundir / "engine.log")
-        stack = np.stack(rows)
-        return Trajectory(
-            time=np.asarray(times),
-            ids=stack[0, :, 0].astype(np.int64),
-            material=common.body_materials(case),
-            mass=stack[0, :, 1].copy(),
-            radius=stack[0, :, 2].copy(),
-            inertia=common.body_inertia(case),
-            position=stack[:, :, 3:6],
-            velocity=stack[:, :, 6:9],
-            angular_velocity=stack[:, :, 9:12],
-            orientation=stack[:, :, 12:16],
-            attrs={"orientation_tracked": False, **common.at_rest_attrs(rundir, physics.schedule(case).dt)},
-        )
+        return common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / DECK_NAME, "cocd", orientation_tracked=False)

@@ -10,173 +10,17 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator import geometry, physics
-from orchestrator.bricks import quaternion_matrices
-from orchestrator.case import Case, CaseError, ContactLaw, Domain
+from orchestrator import physics
+from orchestrator.case import Case, ContactLaw
 from orchestrator.results import Trajectory
-from orchestrator.engines import common, mpi
-from orchestrator.engines.liggghts import plugin
-from orchestrator.engines.liggghts.dump import clump_states, kabsch_quaternions, read_binary_dump, read_dump, sphere_states  # noqa: F401
+from orchestrator.engines import common
+from orchestrator.engines.options import RunOptions
+from orchestrator.engines.liggghts import deck, plugin
+from orchestrator.engines.liggghts.deck import CLUMP_COLUMNS, DECK_NAME, DUMP_NAME, INSTALL_HINT, SPHERE_COLUMNS, TEXT_DUMP_NAME
+from orchestrator.engines.liggghts.dump import clump_states, read_binary_dump, read_dump, sphere_states
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 
-DECK_NAME = "in.liggghts"
-DATA_NAME = "data.spheres"
-DUMP_NAME = "frames.bin"  # binary `dump custom` (LIGGGHTS writes binary when the name ends in .bin)
-TEXT_DUMP_NAME = "frames.dump"  # runs made before the binary dump; still read
-SPHERE_COLUMNS = ("id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz")
-CLUMP_COLUMNS = ("id", "id_multisphere", *SPHERE_COLUMNS[1:])
-STATE_NAME = "state.restart"  # written at the end when the case has `save_state`
-INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from, linked into the run
-INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
-
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
-
-
-def id_ranges(ids: list[int]) -> str:
-    """Compress sorted ids into LIGGGHTS group ranges: [1, 2, 3, 7] → '1:3 7'."""
-    parts: list[str] = []
-    start = previous = ids[0]
-    for value in ids[1:] + [None]:  # type: ignore[list-item]
-        if value is not None and value == previous + 1:
-            previous = value
-            continue
-        parts.append(f"{start}:{previous}" if previous > start else str(start))
-        if value is not None:
-            start = previous = value
-    return " ".join(parts)
-
-
-# LIGGGHTS bins the whole box at half the neighbour cut-off and clears every bin at each rebuild.
-# On the full-scale boards (a 6 x 5 x 3.5 m box for 4 mm spheres) that was 2.4e8 bins: 1.1 GB per
-# process and 0.20 s per rebuild, 16 % of the release. Larger bins cap the count at this many
-# (measured on that release: 0.035 s per rebuild at 18.6 mm bins, pair time unchanged within noise).
-# The demo runs 2.7 x faster with it (1 min 13 s against 3 min 19 s). Bins never change a force:
-# pours with capped and own bins agree to round-off until chaos amplifies it (test_avalanche.py,
-# test_capped_bins_leave_a_brick_pour_unchanged_to_round_off). The demo's packing density, taken
-# before the pile is at rest, scatters by 100 kg/m3 between such round-off twins either way
-# (docs/benchmarks.md, "The neighbour bins").
-MAX_BINS = 2e7
-# Neighbour skin in largest radii. Chosen by measurement (benchmarks/flow_throughput.py, `settings`
-# sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
-SKIN_RADII = 1.0
-PLACEMENT_RADIUS = 1e-3  # m: insert/pack needs a region of some volume (1e-4 m fails); see README
-
-
-def primes_above(start: int, count: int) -> list[int]:
-    """LIGGGHTS random seeds must be primes above 10000."""
-    found: list[int] = []
-    candidate = start + 1
-    while len(found) < count:
-        if all(candidate % d for d in range(2, int(candidate**0.5) + 1)):
-            found.append(candidate)
-        candidate += 1
-    return found
-
-
-def _sphere_radii(case: Case) -> list[float]:
-    radii = [s.radius for s in case.bodies.spheres]
-    radii += [case.shape(c.shape).clump(case.material(c.material).density).radius for c in case.bodies.clumps]
-    return radii
-
-
-def bin_size(domain: Domain, cutoff: float) -> float | None:
-    """The neighbour bin size to ask LIGGGHTS for, or None for its own (half the cut-off).
-
-    A large, mostly empty box (boards of metres, spheres of millimetres) gets bins just large enough
-    to stay within MAX_BINS: memory and the clearing at each rebuild fall with the bin count, while
-    the distance checks per sphere grow with the bin volume (a dense pile pays for bins much larger
-    than the cut-off).
-    """
-    volume = float(np.prod(np.asarray(domain.upper) - np.asarray(domain.lower)))
-    capped = (volume / MAX_BINS) ** (1.0 / 3.0)
-    return capped if capped > 0.5 * cutoff else None
-
-
-def _spheres_per_clump(case: Case) -> str:
-    counts = sorted({case.shape(c.shape).clump(case.material(c.material).density).n_spheres for c in case.bodies.clumps})
-    return " or ".join(str(n) for n in counts) + " spheres each"
-
-
-def _numbers(values: object) -> str:
-    return " ".join(repr(float(v)) for v in values)  # type: ignore[union-attr]
-
-
-def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
-    """Template data for clumps: multisphere templates per (shape, material) and one insertion per clump."""
-    if not case.bodies.clumps:
-        return {"clump_templates": [], "clumps": [], "placement_radius": PLACEMENT_RADIUS}
-    kinds = sorted({(c.shape, c.material) for c in case.bodies.clumps})
-    seeds = primes_above(10000 + case.seed % 100000, 2 * len(kinds) + len(case.bodies.clumps))
-    templates = {}
-    for index, (shape_name, material) in enumerate(kinds):
-        brick = case.shape(shape_name).clump(case.material(material).density)
-        spheres = " ".join(f"{_numbers(c)} {float(r)!r}" for c, r in zip(brick.centres, brick.radii))
-        tensor = brick.inertia_tensor
-        templates[(shape_name, material)] = {
-            "template": f"template_{index + 1}",
-            "distribution": f"distribution_{index + 1}",
-            "seed": seeds[2 * index],
-            "seed2": seeds[2 * index + 1],
-            "type": types[material],
-            "density": case.material(material).density,
-            "n": brick.n_spheres,
-            "spheres": spheres,
-            "multisphere_type": index + 1,
-            "mass": brick.mass,
-            "inertia": _numbers(tensor[i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))),
-        }
-    clumps = [
-        {
-            "position": _numbers(c.position),
-            "orientation": _numbers(c.orientation),
-            "velocity": _numbers(c.velocity),
-            "angular_velocity": _numbers(c.angular_velocity),
-            "distribution": templates[(c.shape, c.material)]["distribution"],
-            "seed": seeds[2 * len(kinds) + i],
-        }
-        for i, c in enumerate(case.bodies.clumps)
-    ]
-    return {"clump_templates": list(templates.values()), "clumps": clumps, "placement_radius": PLACEMENT_RADIUS}
-
-
-def link_initial_state(source: Path, target: Path) -> None:
-    """Put the state file a case starts from into its run directory (a hard link when possible).
-
-    The run then holds everything its deck reads, even if the packing it came from is deleted.
-    """
-    if not source.is_file():
-        raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
-    target.unlink(missing_ok=True)
-    try:
-        os.link(source, target)
-    except OSError:
-        shutil.copyfile(source, target)
-
-
-def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
-    """Consecutive `run` lengths, each followed by the walls removed at its end."""
-    removals = physics.removal_steps(case, plan)
-    remaining = [wall.name for wall in case.walls]
-    segments, done = [], 0
-    for step in sorted(set(removals.values())):
-        removed = [name for name, at in removals.items() if at == step]
-        remaining = [name for name in remaining if name not in removed]
-        segments.append({"steps": step - done, "remove": removed, "remaining": remaining})
-        done = step
-    segments.append({"steps": plan.total_steps - done, "remove": [], "remaining": remaining})
-    return segments
-
-
-def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) -> dict[str, object] | None:
-    """The deck's stop-at-rest runs over the last segment: up to the first check, whole chunks between
-    checks, then the remainder to the end (None: one `run`)."""
-    rest = common.rest_settings(case, plan)
-    if rest is None:
-        return None
-    start = plan.total_steps - last_segment_steps
-    first = min(max(0, rest["after"] - start), last_segment_steps)
-    chunks, remainder = divmod(last_segment_steps - first, rest["every"])
-    return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "speed_squared": float(rest["speed"]) ** 2}
 
 
 class ThermoWatcher:
@@ -207,14 +51,19 @@ class ThermoWatcher:
 class LiggghtsAdapter(AdapterDefaults):
     name = "liggghts"
 
-    def __init__(self, executable: str = "liggghts", mpi_processes: int = 1, processor_grid: str = "* * *"):
+    def __init__(self, executable: str = "liggghts", mpi_processes: int = 1, processor_grid: str = "* * *",
+                 max_bins: float = deck.MAX_BINS, skin_radii: float = deck.SKIN_RADII):
+        """max_bins, skin_radii: neighbour-list tuning (deck.MAX_BINS, deck.SKIN_RADII: measured defaults);
+        they change the speed, never a force."""
         self.executable = executable
         self.mpi_processes = mpi_processes
         self.processor_grid = processor_grid
+        self.max_bins = max_bins
+        self.skin_radii = skin_radii
 
     @classmethod
-    def from_environment(cls) -> "LiggghtsAdapter":
-        return cls(mpi_processes=mpi.mpi_processes(), processor_grid=mpi.processor_grid())
+    def from_options(cls, options: RunOptions) -> "LiggghtsAdapter":
+        return cls(mpi_processes=options.processes(), processor_grid=options.grid())
 
     def build_inputs(self) -> dict[str, str]:
         return {**super().build_inputs(), "plugin": plugin.build_key()}
@@ -236,87 +85,7 @@ class LiggghtsAdapter(AdapterDefaults):
 
     # -- input -----------------------------------------------------------------------------
     def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
-        from orchestrator.engines.templating import render
-
-        prepared = common.prepare(case, case_dir)
-        types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
-        mesh_dir = rundir / "meshes"
-        mesh_dir.mkdir(exist_ok=True)
-        walls = []
-        for wall, triangles in zip(case.walls, prepared.wall_triangles):
-            stl = mesh_dir / f"{wall.name}.stl"
-            geometry.write_ascii_stl(stl, triangles)
-            walls.append({"name": wall.name, "stl": f"meshes/{stl.name}", "type": types[wall.material]})
-        self._write_data(case, prepared, types, rundir / DATA_NAME)
-        if case.initial_state:
-            link_initial_state(case_dir / case.initial_state, rundir / INITIAL_STATE_NAME)
-        gravity = np.asarray(case.gravity, dtype=float)
-        magnitude = float(np.linalg.norm(gravity))
-        direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
-        fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
-        glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
-        segments = run_segments(case, prepared.schedule)
-        radius_max = float(max(_sphere_radii(case)))
-        skin = SKIN_RADII * radius_max
-        context = {
-            "name": case.name,
-            "processors": [int(p) if p != "*" else None for p in self.processor_grid.split()],
-            "materials": [{"name": name, "type": t} for name, t in types.items()],
-            "n_types": len(types),
-            "matrix": common.pair_matrices(case, prepared.pairs),
-            "law": case.law.value,
-            "data_file": DATA_NAME,
-            "dump_file": DUMP_NAME,
-            "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
-            "skin": skin,
-            "binsize": bin_size(prepared.domain, cutoff=2.0 * radius_max + skin),
-            "dt": prepared.schedule.dt,
-            "gravity_magnitude": magnitude,
-            "gravity_direction": [float(v) for v in direction],
-            "walls": walls,
-            "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
-            "glued_ids": id_ranges(glued) if glued else "",
-            "planar": case.planar,
-            **clump_context(case, types),
-            "output_every": prepared.schedule.output_every,
-            "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
-            "total_steps": prepared.schedule.total_steps,
-            "segments": segments,
-            "rest": rest_context(case, prepared.schedule, segments[-1]["steps"]),
-            "initial_state": INITIAL_STATE_NAME if case.initial_state else "",
-            "save_state": case.save_state,
-            "state_file": STATE_NAME,
-        }
-        deck = rundir / DECK_NAME
-        deck.write_text(render("liggghts", "case.in.j2", context))
-        return deck
-
-    def _write_data(self, case: Case, prepared: "common.Prepared", types: dict[str, int], path: Path) -> None:
-        """LIGGGHTS data file (atom_style granular): Atoms `id type diameter density x y z`, then Velocities."""
-        lower, upper = prepared.domain.lower, prepared.domain.upper
-        lines = [
-            f"LIGGGHTS data file written by dem-orchestrator for case {case.name}",
-            "",
-            f"{len(case.bodies.spheres)} atoms",
-            f"{len(types)} atom types",
-            "",
-            f"{lower[0]!r} {upper[0]!r} xlo xhi",
-            f"{lower[1]!r} {upper[1]!r} ylo yhi",
-            f"{lower[2]!r} {upper[2]!r} zlo zhi",
-        ]
-        if not case.bodies.spheres:  # clumps only: they are inserted by the deck
-            path.write_text("\n".join(lines) + "\n")
-            return
-        lines += ["", "Atoms", ""]
-        for i, sphere in enumerate(case.bodies.spheres, start=1):
-            density = case.material(sphere.material).density
-            x, y, z = sphere.position
-            lines.append(f"{i} {types[sphere.material]} {2.0 * sphere.radius!r} {density!r} {x!r} {y!r} {z!r}")
-        lines += ["", "Velocities", ""]
-        for i, sphere in enumerate(case.bodies.spheres, start=1):
-            values = " ".join(repr(float(v)) for v in (*sphere.velocity, *sphere.angular_velocity))
-            lines.append(f"{i} {values}")
-        path.write_text("\n".join(lines) + "\n")
+        return deck.write_deck(case, case_dir, rundir, self.processor_grid, self.max_bins, self.skin_radii)
 
     # -- run -------------------------------------------------------------------------------
     def command(self, deck: Path) -> list[str]:
@@ -343,7 +112,7 @@ class LiggghtsAdapter(AdapterDefaults):
         tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout)
         if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
             lost = watcher.first_atoms - watcher.last_atoms
-            what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {_spheres_per_clump(case)})"
+            what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {deck.spheres_per_clump(case)})"
             raise EngineError(
                 f"{what} left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
                 deck,

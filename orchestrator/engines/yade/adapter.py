@@ -14,7 +14,7 @@ import numpy as np
 
 from orchestrator import physics
 from orchestrator.bricks import world_sphere_centres
-from orchestrator.case import Case, CaseError, ContactLaw, Sphere
+from orchestrator.case import Case, ContactLaw, Sphere
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -78,8 +78,7 @@ class YadeAdapter(AdapterDefaults):
             )
         touching = case.touching_pairs()
         friction = [(p.materials[0], p.materials[1], p.mu) for p in prepared.pairs if frozenset(p.materials) in touching]
-        context = {
-            "name": case.name,
+        data = {
             "seed": case.seed,
             "dt": prepared.schedule.dt,
             "total_steps": prepared.schedule.total_steps,
@@ -87,7 +86,7 @@ class YadeAdapter(AdapterDefaults):
             "output_every": prepared.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
             "frames_file": FRAMES_NAME,
-            "yade_materials": yade_materials(case, prepared.pairs),
+            "materials": yade_materials(case, prepared.pairs),
             "friction": friction,
             "spheres": spheres,
             "clumps": clumps,
@@ -95,6 +94,7 @@ class YadeAdapter(AdapterDefaults):
             "removals": _removals(case, prepared.schedule),
             "rest": common.rest_settings(case, prepared.schedule),
         }
+        context = {"name": case.name, "data": data}
         script = rundir / SCRIPT_NAME
         script.write_text(render("yade", "case.py.j2", context))
         return script
@@ -111,25 +111,7 @@ class YadeAdapter(AdapterDefaults):
             raise EngineError("YADE ended without finishing the script", script, rundir / "engine.log", tail)
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
-        times, rows = common.read_frames(rundir / FRAMES_NAME)
-        script = rundir / SCRIPT_NAME
-        if not rows:
-            raise EngineError("YADE wrote no frames", script, rundir / "engine.log")
-        first = rows[0]
-        stack = np.stack(rows)
-        return Trajectory(
-            time=np.asarray(times),
-            ids=first[:, 0].astype(np.int64),
-            material=common.body_materials(case),
-            mass=first[:, 1].copy(),
-            radius=first[:, 2].copy(),
-            inertia=common.body_inertia(case),
-            position=stack[:, :, 3:6],
-            velocity=stack[:, :, 6:9],
-            angular_velocity=stack[:, :, 9:12],
-            orientation=stack[:, :, 12:16],
-            attrs={"orientation_tracked": True, **common.at_rest_attrs(rundir, physics.schedule(case).dt)},
-        )
+        return common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
 
 
 def _removals(case: Case, plan: physics.Schedule) -> list[tuple[int, list[str]]]:

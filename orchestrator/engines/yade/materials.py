@@ -69,14 +69,13 @@ def _field(quantity: str) -> str:
 
 
 def yade_materials(case: Case, pairs: list[PairConstants]) -> list[dict[str, object]]:
-    """ViscElMat arguments per material, in case order (YADE material id = index)."""
+    """ViscElMat arguments per material, in case order (YADE material id = index). Friction is not a
+    material property here: it reaches YADE once, per pair, through the script's MatchMaker."""
     stiffness = split_in_series(case, pairs, "kn")
     shear = split_in_series(case, pairs, "kt")
     damping = split_in_series(case, pairs, "cn")
-    mu = {frozenset(p.materials): p.mu for p in pairs}
     result = []
     for material in case.materials:
-        self_mu = mu.get(frozenset((material.name,)), max(mu.values()))
         result.append(
             {
                 "name": material.name,
@@ -84,7 +83,6 @@ def yade_materials(case: Case, pairs: list[PairConstants]) -> list[dict[str, obj
                 "kn": stiffness.get(material.name, 0.0),
                 "ks": shear.get(material.name, 0.0),
                 "cn": damping.get(material.name, 0.0),
-                "mu": self_mu,
             }
         )
     return result

@@ -1,6 +1,6 @@
 """Pictures and pages of an avalanche run: what a person looks at before reading numbers.
 
-All figures are matplotlib PNGs (Agg backend, no display needed); `index.html` shows them with the
+All figures are matplotlib PNGs (orchestrator.figures: no pyplot, no display needed); `index.html` shows them with the
 metrics table; `bodies_NNNN.vtu` (meshio) opens in ParaView.
 """
 
@@ -11,15 +11,12 @@ import math
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+import meshio
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import meshio  # noqa: E402
-import numpy as np  # noqa: E402
-
-from orchestrator.post.front import flat_phases  # noqa: E402
-from orchestrator.results import Trajectory  # noqa: E402
+from orchestrator.figures import subplots
+from orchestrator.post.front import flat_phases
+from orchestrator.results import Trajectory
 
 # The 2012 study's front phases on the flat (reference.toml, random_pour_findings), for the plot.
 FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))
@@ -72,7 +69,7 @@ def plot_deposit(trajectory: Trajectory, path: Path, slope_deg: float = 45.0) ->
     """Plan view (x, y) and longitudinal section (x, z) of the final state, coloured by height."""
     final = trajectory.position[-1]
     ok = np.isfinite(final).all(axis=1)
-    fig, (plan, section) = plt.subplots(2, 1, figsize=(8, 8), constrained_layout=True)
+    fig, (plan, section) = subplots(2, 1, figsize=(8, 8), constrained_layout=True)
     scatter = plan.scatter(final[ok, 0], final[ok, 1], c=final[ok, 2], s=6, cmap="viridis")
     plan.axvline(0.0, color="k", lw=0.8, ls="--", label="slope toe")
     plan.set_ylabel("y (m)")
@@ -86,14 +83,13 @@ def plot_deposit(trajectory: Trajectory, path: Path, slope_deg: float = 45.0) ->
     section.set_ylabel("z (m)")
     section.set_title("Longitudinal section")
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def plot_front(report: dict[str, Any], path: Path) -> None:
     """Front position versus time, and front velocity versus front position on the flat board."""
     front = report["front"]
     time, position, velocity = (np.asarray(front[k], dtype=float) for k in ("time", "position", "velocity"))
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
+    fig, (left, right) = subplots(1, 2, figsize=(11, 4), constrained_layout=True)
     left.plot(time, position, color="tab:blue")
     left.axhline(0.0, color="k", lw=0.8, ls="--")
     left.set_xlabel("t (s)")
@@ -114,7 +110,6 @@ def plot_front(report: dict[str, Any], path: Path) -> None:
     right.set_ylabel("front velocity (m/s)")
     right.set_title("Front velocity on the flat (cf. the 2012 study, Figs 12c/14c)")
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def plot_snapshots(trajectory: Trajectory, outdir: Path, count: int = 6, slope_deg: float = 45.0) -> list[Path]:
@@ -126,7 +121,7 @@ def plot_snapshots(trajectory: Trajectory, outdir: Path, count: int = 6, slope_d
     zlim = (-0.02, np.nanmax(positions[..., 2]) + 0.05)
     paths = []
     for frame in frames:
-        fig, ax = plt.subplots(figsize=(8, 3.2), constrained_layout=True)
+        fig, ax = subplots(figsize=(8, 3.2), constrained_layout=True)
         ax.plot([xlim[0], 0.0, xlim[1]], [max(-xlim[0], 0.0) * math.tan(math.radians(slope_deg)), 0.0, 0.0], color="k", lw=1)
         ax.scatter(positions[frame, ok[frame], 0], positions[frame, ok[frame], 2], s=4, color="tab:brown")
         ax.set_xlim(*xlim)
@@ -137,7 +132,6 @@ def plot_snapshots(trajectory: Trajectory, outdir: Path, count: int = 6, slope_d
         ax.set_ylabel("z (m)")
         path = outdir / f"snapshot_{frame:04d}.png"
         fig.savefig(path, dpi=100)
-        plt.close(fig)
         paths.append(path)
     return paths
 

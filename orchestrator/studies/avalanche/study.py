@@ -9,24 +9,20 @@ bricks with the trap gone flow for `release.duration`; its time starts at the op
 
 from __future__ import annotations
 
-import json
 import os
 import tomllib
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 import numpy as np
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from orchestrator.post import deposit, front
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
 from orchestrator.bricks import BrickClump
-from orchestrator.validation import format_error
 from orchestrator.case import Case, CaseError, Name, Real, RestStop, Strict, parse_case
-from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
-from orchestrator.engines.mpi import default_grid
-from orchestrator.results import Trajectory, read_results
+from orchestrator.engines import DEFAULT_ENGINE, Engine, RunOptions, capabilities
+from orchestrator.results import Trajectory
 from orchestrator.rundir import run_id, saved_case
 from orchestrator.studies.base import StageProgress, StudyKind
 
@@ -297,13 +293,14 @@ def run_study(
     progress: StageProgress | None = None,
     packings: Path | None = None,
     timeout: float | None = None,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Pack (or reuse the packing from `packings`, default outdir/../packings), release, measure.
 
     A finished release in outdir/run is reused (rerun = report only). Returns the report, also
     written to outdir/report.json (studies.base.run_study).
     """
-    return KIND.run(study, outdir, progress, packings, timeout)
+    return KIND.run(study, outdir, progress, packings, timeout, options)
 
 
 def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0, gravity: float = 9.81) -> dict[str, Any]:

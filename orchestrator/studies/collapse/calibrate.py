@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
+from orchestrator.engines import RunOptions
 from orchestrator.studies.collapse.spec import CollapseStudy
 from orchestrator.studies.collapse.study import run_collapse
 
@@ -38,14 +39,16 @@ def calibrate_mu(
     tolerance: float = 0.05,
     max_runs: int = 8,
     on_run: Callable[[float, float], None] | None = None,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
-    """Bisect μ in `mu_range` for ΔL/L0 = 1.2 a. Returns the history, the chosen μ and whether it is in the band."""
+    """Bisect μ in `mu_range` for ΔL/L0 = 1.2 a. Returns the history, the chosen μ and whether it is in the band.
+    options: how the engines run (MPI processes)."""
     target = target_runout(study)
     low, high = mu_range
     history: list[dict[str, float]] = []
     for _ in range(max_runs):
         mu = round(0.5 * (low + high), 4)
-        report = run_collapse(with_mu(study, mu), outdir / f"mu-{mu:.4f}", preparations=outdir / "preparations")
+        report = run_collapse(with_mu(study, mu), outdir / f"mu-{mu:.4f}", preparations=outdir / "preparations", options=options)
         ratio = report["runout_over_R0"]
         history.append({"mu": mu, "runout_over_R0": ratio, "at_rest": bool(report["front"]["at_rest"])})
         if on_run:

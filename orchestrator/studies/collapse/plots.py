@@ -6,14 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+from orchestrator.figures import subplots
+import numpy as np
+from scipy.ndimage import uniform_filter1d
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from scipy.ndimage import uniform_filter1d  # noqa: E402
-
-from orchestrator.post.collapse import FRONT_WINDOW  # noqa: E402
+from orchestrator.post.collapse import FRONT_WINDOW
 
 
 def _mark_phases(axis: Any, front: dict[str, Any], key: str) -> None:
@@ -31,7 +28,7 @@ def plot_run(report: dict[str, Any], arrays: dict[str, np.ndarray], path: Path) 
     study, front = report["study"], report["front"]
     r0 = study["column"]["length"]
     time = np.asarray(front["time"])
-    figure, (top, middle, bottom) = plt.subplots(3, 1, figsize=(7, 9), constrained_layout=True)
+    figure, (top, middle, bottom) = subplots(3, 1, figsize=(7, 9), constrained_layout=True)
     top.plot(time, np.asarray(front["position"]) / r0, color="C0")
     top.set_ylabel("front r_f / R0")
     _mark_phases(top, front, "legend")
@@ -52,7 +49,6 @@ def plot_run(report: dict[str, Any], arrays: dict[str, np.ndarray], path: Path) 
     title = f"{study['name']}: α = {study['channel']['slope_deg']:g}°, h_i = {1000 * study['bed']['erodible_thickness']:g} mm, runout {report['runout_over_R0']:.2f} R0"
     figure.suptitle(title, fontsize=10)
     figure.savefig(path, dpi=120)
-    plt.close(figure)
     return path
 
 
@@ -64,7 +60,7 @@ def plot_slope_bed(reports: list[dict[str, Any]], directory: Path) -> list[Path]
     slopes = sorted(by_slope)
     written = []
     for quantity, label, name in (("position", "r_f / R0", "front_position.png"), ("velocity", "front velocity (m/s)", "front_velocity.png")):
-        figure, axes = plt.subplots(1, len(slopes), figsize=(4 * len(slopes), 3.6), sharey=True, squeeze=False, constrained_layout=True)
+        figure, axes = subplots(1, len(slopes), figsize=(4 * len(slopes), 3.6), sharey=True, squeeze=False, constrained_layout=True)
         for axis, slope in zip(axes[0], slopes):
             for report in sorted(by_slope[slope], key=lambda r: r["study"]["bed"]["erodible_thickness"]):
                 front, study = report["front"], report["study"]
@@ -76,6 +72,5 @@ def plot_slope_bed(reports: list[dict[str, Any]], directory: Path) -> list[Path]
         axes[0][0].set_ylabel(label)
         path = directory / name
         figure.savefig(path, dpi=120)
-        plt.close(figure)
         written.append(path)
     return written

@@ -25,8 +25,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 from scipy.spatial import cKDTree
 
 from orchestrator.case import Case, CaseError, Name, Real, Strict, parse_case, parse_model, read_yaml

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.case import Case
+from orchestrator.engines import RunOptions
 from orchestrator.post import collapse as cm
 from orchestrator.results import Trajectory
 from orchestrator.rundir import saved_case
@@ -56,10 +57,11 @@ def run_collapse(
     progress: StageProgress | None = None,
     preparations: Path | None = None,
     timeout: float | None = None,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Prepare (or reuse the preparation in `preparations`), release, measure (studies.base.run_study).
     A finished release is reused."""
-    return KIND.run(study, outdir, progress, preparations, timeout)
+    return KIND.run(study, outdir, progress, preparations, timeout, options)
 
 
 def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray, g_normal: float | None = None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
