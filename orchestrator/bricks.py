@@ -34,6 +34,10 @@ class BrickClump:
     density: float
     layout: tuple[int, int, int]  # spheres along x (length), y (width), z (thickness)
     bevel_deg: float = 0.0  # turn of the +x, +y, +z faces (0: a box)
+    # The body's mass (kg) and principal moments (kg m², about the brick axes) when given: those of
+    # another solid than the sharp box, e.g. the study's brick with 1 mm rounded edges. None: the box's.
+    mass_given: float | None = None
+    inertia_given: tuple[float, float, float] | None = None
 
     @cached_property
     def vertices(self) -> np.ndarray:
@@ -115,11 +119,14 @@ class BrickClump:
 
     @property
     def mass(self) -> float:
-        return self.density * self.volume
+        return self.mass_given if self.mass_given is not None else self.density * self.volume
 
     @cached_property
     def inertia_tensor(self) -> np.ndarray:
-        """(3, 3) inertia of the solid about its centre of mass, in the brick axes: ρ (tr(C) 1 − C)."""
+        """(3, 3) inertia of the solid about its centre of mass, in the brick axes: ρ (tr(C) 1 − C),
+        or diag(inertia_given)."""
+        if self.inertia_given is not None:
+            return np.diag(np.asarray(self.inertia_given, dtype=float))
         covariance = self._mass_properties[2]
         return self.density * (np.trace(covariance) * np.eye(3) - covariance)
 
@@ -159,10 +166,12 @@ class BrickClump:
 
 
 @lru_cache(maxsize=256)
-def brick_clump(length: float, width: float, thickness: float, density: float, layout: tuple[int, int, int], bevel_deg: float = 0.0) -> BrickClump:
+def brick_clump(length: float, width: float, thickness: float, density: float, layout: tuple[int, int, int], bevel_deg: float = 0.0,
+                mass: float | None = None, inertia: tuple[float, float, float] | None = None) -> BrickClump:
     """One shared BrickClump per set of inputs: cases ask for a shape's clump once per body (10 000
     times for an ordered pile), and its layout, hull and moments are then worked out once."""
-    return BrickClump(length, width, thickness, density, tuple(layout), bevel_deg)  # type: ignore[arg-type]
+    return BrickClump(length, width, thickness, density, tuple(layout), bevel_deg, mass,  # type: ignore[arg-type]
+                      None if inertia is None else tuple(float(i) for i in inertia))
 
 
 def solid_moments(points: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

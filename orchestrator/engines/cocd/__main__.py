@@ -33,7 +33,7 @@ def load_scene(deck: dict) -> Scene:
             origin=np.asarray([w["origin"] for w in walls], dtype=float).reshape(-1, 3),
             edge1=np.asarray([w["edge1"] for w in walls], dtype=float).reshape(-1, 3),
             edge2=np.asarray([w["edge2"] for w in walls], dtype=float).reshape(-1, 3),
-            mu=np.asarray([w["mu"] for w in walls], dtype=float).reshape(len(walls), -1),
+            mu=np.asarray([w["mu"] for w in walls], dtype=float).reshape(len(walls), len(deck["mu"])),
             names=[w["name"] for w in walls],
             active=np.ones(len(walls), bool),
         ),

@@ -50,7 +50,9 @@ MAX_BINS = 2e7
 # Neighbour skin in largest radii. Chosen by measurement (benchmarks/flow_throughput.py, `settings`
 # sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
 SKIN_RADII = 1.0
-PLACEMENT_RADIUS = 1e-3  # m: insert/pack needs a region of some volume (1e-4 m fails); see README
+# m: insert/pack puts a clump's centre at random in a region; a sphere this small (with the region's
+# volume_limit lowered, else LIGGGHTS refuses regions under about 1e-12 m³) places it within 1e-9 m.
+PLACEMENT_RADIUS = 1e-9
 
 
 def primes_above(start: int, count: int) -> list[int]:
