@@ -34,6 +34,15 @@ def _reject_bool(value: object) -> object:
 
 FiniteFloat = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False)]
 Vec3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+# Physical bounds of the vectors of a case, far beyond any granular flow but finite: a coordinate of
+# 1e300 m or a speed of 1e8 m/s is a typo, and an engine would meet it as an overflow.
+Coordinate = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e4, le=1e4)]  # m
+Speed = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e3, le=1e3)]  # m/s
+Spin = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e5, le=1e5)]  # rad/s
+Acceleration = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e3, le=1e3)]  # m/s²
+Position = tuple[Coordinate, Coordinate, Coordinate]
+Velocity = tuple[Speed, Speed, Speed]
+AngularVelocity = tuple[Spin, Spin, Spin]
 
 
 def Real(**bounds: float) -> object:
@@ -119,9 +128,9 @@ class ContactPair(Strict):
 class Sphere(Strict):
     material: Name
     radius: Real(gt=0.0, le=10.0)
-    position: Vec3
-    velocity: Vec3 = (0.0, 0.0, 0.0)
-    angular_velocity: Vec3 = (0.0, 0.0, 0.0)
+    position: Position
+    velocity: Velocity = (0.0, 0.0, 0.0)
+    angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
     # A sphere that cannot rotate slides like a block: the sliding-friction check needs it.
     fixed_rotation: bool = False
     # Glued: the sphere never moves (it still touches others). The rough bed of a collapse channel.
@@ -163,10 +172,10 @@ class Clump(Strict):
 
     shape: Name
     material: Name
-    position: Vec3
+    position: Position
     orientation: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
-    velocity: Vec3 = (0.0, 0.0, 0.0)
-    angular_velocity: Vec3 = (0.0, 0.0, 0.0)
+    velocity: Velocity = (0.0, 0.0, 0.0)
+    angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
 
     @field_validator("orientation")
     def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
@@ -195,9 +204,9 @@ class RectangleWall(Strict):
     type: Literal["rectangle"]
     name: Name
     material: Name
-    origin: Vec3
-    edge1: Vec3
-    edge2: Vec3
+    origin: Position
+    edge1: Position
+    edge2: Position
     remove_at: Real(gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
 
     @model_validator(mode="after")
@@ -233,8 +242,8 @@ Wall = Annotated[Union[RectangleWall, MeshWall], Field(discriminator="type")]
 class Domain(Strict):
     """Simulation box (LIGGGHTS needs one). Bodies leaving it are lost and reported."""
 
-    lower: Vec3
-    upper: Vec3
+    lower: Position
+    upper: Position
 
     @model_validator(mode="after")
     def _ordered(self) -> "Domain":
@@ -250,7 +259,7 @@ class Case(EngineSections, Strict):
     engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 12345
     time: TimeSettings
-    gravity: Vec3 = (0.0, 0.0, -9.81)
+    gravity: tuple[Acceleration, Acceleration, Acceleration] = (0.0, 0.0, -9.81)
     materials: Annotated[list[Material], Field(min_length=1, max_length=32)]
     contacts: Annotated[list[ContactPair], Field(min_length=1)]
     shapes: list[BrickShape] = []

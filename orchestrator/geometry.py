@@ -5,6 +5,8 @@ LIGGGHTS reads them as an ASCII STL mesh, YADE as facets, so both engines see id
 
 from __future__ import annotations
 
+import warnings
+
 from pathlib import Path
 
 import meshio
@@ -26,7 +28,11 @@ def mesh_triangles(wall: MeshWall, case_dir: Path) -> np.ndarray:
     """Triangles of an STL file (ASCII or binary), scaled by `wall.scale`."""
     path = (case_dir / wall.file).resolve()
     try:
-        mesh = meshio.read(path, file_format="stl")
+        with warnings.catch_warnings():
+            # meshio first reads an ASCII STL as binary (its triangle count overflows): a warning of
+            # meshio's own format detection, not a problem of the file.
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mesh = meshio.read(path, file_format="stl")
     except (OSError, meshio.ReadError, ValueError) as error:
         raise CaseError(f"walls.{wall.name}.file: cannot read STL mesh {path} ({error})") from None
     triangles = [block.data for block in mesh.cells if block.type == "triangle"]

@@ -171,6 +171,12 @@ def time_step(case: Case) -> float:
     can = capabilities(case.engine)
     if can.implicit:  # no stiffness, no contact duration: the engine's own step
         return float(can.default_step)
+    factor = case.time.safety_factor if case.time.safety_factor is not None else default_safety_factor(case)
+    return factor * shortest_contact_duration(case)
+
+
+def shortest_contact_duration(case: Case) -> float:
+    """s; the shortest undamped contact duration over the pairs that can touch (see time_step)."""
     smallest = smallest_masses(case)
     durations = []
     for pair in case.contacts:
@@ -179,8 +185,7 @@ def time_step(case: Case) -> float:
         a, b = pair.materials
         mass = effective_mass(smallest.get(a), smallest.get(b))
         durations.append(contact_duration(pair.kn, mass))
-    factor = case.time.safety_factor if case.time.safety_factor is not None else default_safety_factor(case)
-    return factor * min(durations)
+    return min(durations)
 
 
 def default_safety_factor(case: Case) -> float:
@@ -237,15 +242,16 @@ def rest_check_steps(case: Case, plan: Schedule) -> tuple[int, int] | None:
 
 
 def schedule(case: Case) -> Schedule:
-    """Steps per output interval (the interval rounded to whole steps) and the number of intervals.
+    """Steps per output interval (the interval rounded to whole steps, at least one) and the number of
+    intervals: the duration over the interval actually run, rounded to the nearest whole number.
 
-    The number of intervals counts the *requested* interval into the duration (rounded up): counting
-    the rounded one would add a whole interval whenever rounding made it a hair shorter (a 0.1 s run
-    with 0.02 s output ran 0.12 s). The end time then differs from the duration by at most half a
-    step per frame.
+    So the run ends within half an output interval of the duration whatever the rounding: rounding up
+    instead would add a whole interval whenever rounding made it a hair shorter (a 0.1 s run with
+    0.02 s output ran 0.12 s), and counting the requested interval would run 0.41 s for 0.35 s when
+    the step is longer than the interval (1.18e-5 s steps for 1e-5 s output).
     """
     dt = time_step(case)
     output_every = max(1, round(case.time.output_interval / dt))
-    frames = max(1, math.ceil(case.time.duration / case.time.output_interval - 1e-9))
+    frames = max(1, round(case.time.duration / (output_every * dt)))
     return Schedule(dt=dt, output_every=output_every, frames=frames, total_steps=frames * output_every)
 

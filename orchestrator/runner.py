@@ -12,18 +12,22 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from orchestrator import __version__, rundir
+import numpy as np
+
+from orchestrator import __version__, preflight, rundir
 from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
+from orchestrator.engines import common
 from orchestrator.engines.base import ProgressCallback
 from orchestrator.post import summary
-from orchestrator.results import write_results
+from orchestrator.results import Trajectory, write_results
 
 RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
 
 
 def render_case(case: Case, case_dir: Path, directory: Path) -> Path:
     """Write the deck (and its data files) only; returns the deck path."""
+    preflight.check(case, case_dir)
     directory.mkdir(parents=True, exist_ok=True)
     rundir.save_inputs(directory, case)
     return get_adapter(case.engine.value).write_input(case, case_dir, directory)
@@ -53,6 +57,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
                adapter: EngineAdapter | None = None) -> dict[str, Any]:
     """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
     adapter = adapter or get_adapter(case.engine.value)
+    preflight.check(case, case_dir)
     build = rundir.build_stamp(case.engine.value)
     directory.mkdir(parents=True, exist_ok=True)
     rundir.save_inputs(directory, case)
@@ -74,6 +79,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     try:
         adapter.execute(case, directory, progress=progress, timeout=timeout)
         trajectory = adapter.read_output(case, directory)
+        check_inside(case, case_dir, trajectory, deck)
     except EngineError as error:
         record.update(status="failed", error=error.summary, log_tail=error.tail, wall_time_s=time.perf_counter() - started)
         rundir.write_json_atomic(record_path, record)
@@ -92,6 +98,18 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     )
     rundir.write_json_atomic(record_path, record)
     return record
+
+
+def check_inside(case: Case, case_dir: Path, trajectory: Trajectory, deck: Path) -> None:
+    """Every engine ends a run whose bodies left the domain the same way (LIGGGHTS drops such bodies
+    and says so; YADE and cocd would carry them on): an EngineError naming the first frame."""
+    domain = common.prepare(case, case_dir).domain
+    position = trajectory.position
+    outside = np.isfinite(position).all(axis=2) & ((position < np.asarray(domain.lower)) | (position > np.asarray(domain.upper))).any(axis=2)
+    if outside.any():
+        frame = int(np.flatnonzero(outside.any(axis=1))[0])
+        raise EngineError(f"{int(outside[frame].sum())} bodies left the simulation domain by t = {trajectory.time[frame]:.4g} s; "
+                          "enlarge `domain:` in the case", deck, deck.parent / "engine.log")
 
 
 def ensure_run(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import reprlib
 from pathlib import Path
 from typing import TypeVar, Union, get_args, get_origin
 
@@ -37,9 +38,14 @@ def allowed_range(root: type[BaseModel], location: tuple[object, ...]) -> str | 
         annotation = info.annotation
     if info is None:
         return None
+    constraints = list(info.metadata)
+    vector = info.annotation
+    if get_origin(vector) is tuple and location and isinstance(location[-1], int):  # an element of a vector field
+        element = get_args(vector)[min(location[-1], len(get_args(vector)) - 1)]
+        constraints += [c for meta in get_args(element)[1:] for c in getattr(meta, "metadata", [meta])]
     low = high = None
     low_open = high_open = True
-    for constraint in info.metadata:
+    for constraint in constraints:
         for name, closed in (("gt", False), ("ge", True)):
             if getattr(constraint, name, None) is not None:
                 low, low_open = getattr(constraint, name), not closed
@@ -67,10 +73,25 @@ def format_error(error: ValidationError, root: type[BaseModel] | None = None) ->
             message = f"{message}; allowed range: {allowed}" if allowed else message
         text = f"{'.'.join(str(p) for p in location)}: {message}" if location else message
         if location and item["type"] != "missing":
-            shown = repr(item.get("input"))
-            text += f" (got {shown[:57] + '...' if len(shown) > 60 else shown})"
-        lines.append(text)
-    return "; ".join(lines)
+            text += f" (got {_SHORT.repr(item.get('input'))})"
+        lines.append(bounded(text))
+    shown = "; ".join(lines[:MAX_PROBLEMS])
+    return shown + (f"; and {len(lines) - MAX_PROBLEMS} more problems" if len(lines) > MAX_PROBLEMS else "")
+
+
+MAX_PROBLEMS = 5
+MAX_MESSAGE = 300
+# A value is shown cut short without ever being formatted whole (a huge list costs nothing here).
+_SHORT = reprlib.Repr()
+_SHORT.maxstring = _SHORT.maxother = 60
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 4
+_SHORT.maxlevel = 2
+
+
+def bounded(text: str, limit: int = MAX_MESSAGE) -> str:
+    """`text` on one line, at most `limit` characters."""
+    line = " ".join(text.split())
+    return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
@@ -86,14 +107,56 @@ def parse_model(model: type[ModelT], data: object, source: str) -> ModelT:
         raise CaseError(f"{source}: {format_error(error, model)}") from None
 
 
+MAX_FILE_BYTES = 16 * 1024 * 1024  # a case of 10 000 bricks is about 2 MB
+
+
+class _StrictLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
+    """YAML's safe loader (libyaml's when present: 5 × faster), minus what lets a small file mislead or
+    exhaust the reader: a key given twice (YAML keeps the last silently) and aliases (`*ref`, which
+    a kilobyte of nested ones turns into gigabytes once expanded)."""
+
+    def construct_document(self, node: yaml.Node) -> object:
+        seen: set[int] = set()
+        pending = [node]
+        while pending:  # an alias is a node reached twice
+            current = pending.pop()
+            if id(current) in seen:
+                raise yaml.constructor.ConstructorError(None, None, "aliases (*name) are not allowed; write the value out", current.start_mark)
+            seen.add(id(current))
+            if isinstance(current, yaml.SequenceNode):
+                pending.extend(current.value)
+            elif isinstance(current, yaml.MappingNode):
+                pending.extend(part for pair in current.value for part in pair)
+        return super().construct_document(node)
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            key = key_node.value if isinstance(key_node, yaml.ScalarNode) else id(key_node)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(None, None, f"duplicate key {str(key)[:40]!r}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _StrictLoader.construct_mapping)
+
+
 def read_yaml(path: str | Path, what: str = "case file") -> object:
-    """The YAML document in `path` (safe loader), or CaseError naming the file and the problem."""
+    """The YAML document in `path` (strict safe loader: no duplicate keys, no aliases, at most 16 MB),
+    or CaseError naming the file and the problem."""
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise CaseError(f"{path}: the {what} is over {MAX_FILE_BYTES // 2**20} MB")
         text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise CaseError(f"{path}: cannot read the {what} ({error.strerror})") from None
+    except UnicodeDecodeError:
+        raise CaseError(f"{path}: the {what} is not UTF-8 text") from None
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as error:
-        raise CaseError(f"{path}: not valid YAML ({str(error).splitlines()[0]})") from None
+        raise CaseError(f"{path}: not valid YAML ({bounded(str(error).splitlines()[0] if str(error) else type(error).__name__)})") from None
+    except RecursionError:
+        raise CaseError(f"{path}: not valid YAML (nested too deeply)") from None

@@ -22,7 +22,7 @@ LAYERS: list[tuple[str, ...]] = [
      "orchestrator.figures",
      "orchestrator.bricks", "orchestrator.contact.law", "orchestrator.contact"),
     ("orchestrator.case",),
-    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post"),
+    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.preflight"),
     ("orchestrator.engines",),
     ("orchestrator.rundir",),
     ("orchestrator.runner",),

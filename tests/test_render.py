@@ -111,15 +111,41 @@ def test_initial_state_errors_come_before_any_engine(tmp_path: Path, no_engine_p
         with_engine(case.model_copy(update={"initial_state": "packed.restart"}), "yade")
 
 
+def saved_state(directory: Path) -> Path:
+    """A state file as a finished run leaves it: state.restart beside its run.json and case.json."""
+    directory.mkdir(parents=True)
+    (directory / "state.restart").write_bytes(b"state")
+    (directory / "run.json").write_text(json.dumps({"status": "completed"}))
+    (directory / "case.json").write_text(json.dumps({"save_state": True}))
+    return directory / "state.restart"
+
+
 def test_state_files_in_the_liggghts_deck(tmp_path: Path) -> None:
-    """save_state writes a restart at the end; initial_state reads one (linked into the run) instead of the data file."""
-    (tmp_path / "packed.restart").write_bytes(b"state")
-    case = sliding_case("liggghts").model_copy(update={"initial_state": "packed.restart", "save_state": True})
+    """save_state writes a restart at the end; initial_state reads one (copied into the run) instead of the data file."""
+    source = saved_state(tmp_path / "packing")
+    case = sliding_case("liggghts").model_copy(update={"initial_state": "packing/state.restart", "save_state": True})
     deck = render_case(case, tmp_path, tmp_path / "run").read_text()
     assert "read_restart    initial.restart" in deck and "read_data" not in deck
     assert deck.rstrip().endswith("write_restart   state.restart")
     assert deck.index("reset_timestep  0") < deck.index("\nrun ")
-    assert (tmp_path / "run" / "initial.restart").read_bytes() == b"state"
+    copy = tmp_path / "run" / "initial.restart"
+    assert copy.read_bytes() == b"state" and copy.stat().st_ino != source.stat().st_ino  # a copy, not a link
+
+
+@pytest.mark.parametrize("prepare", ["any_file", "unfinished_run", "no_save_state"])
+def test_initial_state_must_be_a_state_this_package_wrote(prepare: str, tmp_path: Path, no_engine_process: None) -> None:
+    source = saved_state(tmp_path / "packing")
+    if prepare == "any_file":
+        (tmp_path / "secret.txt").write_text("not a restart")
+        relative = "secret.txt"
+    else:
+        key, value = ("status", "failed") if prepare == "unfinished_run" else ("save_state", False)
+        record = tmp_path / "packing" / ("run.json" if key == "status" else "case.json")
+        record.write_text(json.dumps({key: value}))
+        relative = str(source.relative_to(tmp_path))
+    case = sliding_case("liggghts").model_copy(update={"initial_state": relative})
+    with pytest.raises(CaseError, match=r"^initial_state: .* is not a state this package wrote"):
+        render_case(case, tmp_path, tmp_path / "run")
 
 
 def test_mpi_settings_reach_the_command_and_the_deck(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

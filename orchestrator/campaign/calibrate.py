@@ -23,11 +23,10 @@ from typing import Annotated, Any, Callable, Literal
 
 import numpy as np
 import pandas as pd
-import yaml
-from pydantic import Field, ValidationError
+from pydantic import Field
 
 from orchestrator.bricks import quaternion_matrix
-from orchestrator.validation import format_error
+from orchestrator.validation import parse_model, read_yaml
 from orchestrator.case import Case, CaseError, Name, Strict, parse_case
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS
@@ -125,12 +124,9 @@ class Calibration:
 
 
 def load_calibration(path: Path, directory: Path) -> Calibration:
-    try:
-        spec = CalibrationSpec.model_validate(yaml.safe_load(path.read_text()))
-    except ValidationError as error:
-        raise CaseError(f"{path}: {format_error(error)}") from None
+    spec = parse_model(CalibrationSpec, read_yaml(path, "calibration"), str(path))
     base_path = (path.parent / spec.base).resolve()
-    base = yaml.safe_load(base_path.read_text())
+    base = read_yaml(base_path, "base case")
     times, measured = read_measured((path.parent / spec.measured).resolve())
     directory.mkdir(parents=True, exist_ok=True)
     return Calibration(spec, base, base_path.parent, times, measured, directory)

@@ -10,9 +10,10 @@ expressions (`contacts.0.kn: "contacts.1.kn * 2"`), evaluated by a small AST wal
 from __future__ import annotations
 
 import ast
-import re
 import copy
 import itertools
+import math
+import re
 import operator
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
@@ -102,6 +103,18 @@ def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
     return spec, base
 
 
+MAX_POINTS = 100_000  # runs in one campaign
+
+
+def _design_size(design: GridDesign | ZipDesign | SampledDesign) -> int:
+    """The number of points a design gives, without making them."""
+    if isinstance(design, GridDesign):
+        return math.prod(len(values) for values in design.parameters.values())
+    if isinstance(design, ZipDesign):
+        return len(next(iter(design.parameters.values()), []))
+    return design.samples if design.kind == "lhs" else 2 ** int(np.ceil(np.log2(design.samples)))
+
+
 def design_points(design: GridDesign | ZipDesign | SampledDesign) -> list[dict[str, Any]]:
     if isinstance(design, GridDesign):
         names = list(design.parameters)
@@ -173,8 +186,14 @@ def evaluate(expression: str, data: dict[str, Any]) -> float:
     try:
         # Case paths index lists with dots (contacts.0.kn); Python wants contacts[0].kn.
         return walk(ast.parse(re.sub(r"(?<=[A-Za-z_\]])\.(\d+)", r"[\1]", expression), mode="eval"))
-    except SyntaxError:
-        raise CaseError(f"derived expression {expression!r} is not valid arithmetic") from None
+    except CaseError:
+        raise
+    except (SyntaxError, RecursionError, ValueError):
+        raise CaseError(f"derived expression {expression[:80]!r} is not valid arithmetic") from None
+    except ZeroDivisionError:
+        raise CaseError(f"derived expression {expression[:80]!r} divides by zero") from None
+    except OverflowError:
+        raise CaseError(f"derived expression {expression[:80]!r} overflows (its value is beyond 1e308)") from None
     except (KeyError, IndexError, TypeError):
         raise CaseError(f"derived expression {expression!r} names a path the case does not have") from None
 
@@ -194,6 +213,9 @@ def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any
     kind = base_kind(spec, base)
     if kind != "case":  # a study: every field present (defaults filled in), so any study path can vary
         base = validate_point(kind, base, spec.base).model_dump(mode="json")
+    size = math.prod([_design_size(design) for design in spec.designs]) * spec.replicates
+    if size > MAX_POINTS:
+        raise CaseError(f"designs: {size:.3g} runs (the product of the designs' sizes × replicates); allowed: at most {MAX_POINTS}")
     blocks = [design_points(design) for design in spec.designs] or [[{}]]
     points = [dict(itertools.chain.from_iterable(p.items() for p in combo)) for combo in itertools.product(*blocks)]
     expanded = []

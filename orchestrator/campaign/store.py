@@ -84,6 +84,8 @@ def build_index(campaign_dir: Path) -> pd.DataFrame:
     points = rundir.read_json(campaign_dir / POINTS) or {}
     rows = []
     for identifier, parameters in points.items():
+        if not isinstance(parameters, dict) or not all(c.isalnum() for c in identifier):
+            continue  # a damaged points.json: its run ids are hex digits, its parameters a mapping
         directory = run_dir(campaign_dir, identifier)
         row: dict[str, Any] = {"run_id": identifier, "status": status(directory)}
         row.update({f"param.{k}": v for k, v in parameters.items()})

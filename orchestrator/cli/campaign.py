@@ -63,7 +63,13 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
     for line in failures:
         errors.print(f"[red]failed[/] {line}", markup=True, highlight=False)
     console.print(f"{directory}: {counts.done} run, {counts.skipped} already there, {counts.failed} failed; index: {directory / 'index.parquet'}")
-    if counts.failed:
+    from orchestrator.campaign.store import build_index
+
+    index = build_index(directory)
+    remaining = int((index["status"] == "failed").sum()) if not index.empty else 0
+    if remaining:  # this launch's failures, and those of earlier launches it skipped
+        errors.print(f"[red]{remaining} failed runs remain[/] (`demorch campaign table {directory}`; run them again with --rerun-failed)",
+                     markup=True, highlight=False)
         sys.exit(3)
 
 

@@ -20,17 +20,21 @@ from orchestrator.case import CaseError, load_case, with_engine
 from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
-from orchestrator.cli.common import console, default_rundir, fail, metrics_table, progress_callback, run_options
+from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import MPI_ENV, RunOptions
+from orchestrator import preflight
 from orchestrator.post import summary as metrics
 from orchestrator.results import read_results
+from orchestrator.rundir import read_json
+from orchestrator.validation import bounded
 from orchestrator.runner import RESULTS, render_case, run_case
 
 
 def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
     try:
         case = with_engine(load_case(case_path), engine)
+        preflight.check(case, case_path.parent)  # before the progress bar: a bad case is one line
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
@@ -79,12 +83,12 @@ def render(case_path: Path, engine: str | None, output: Path) -> None:
     console.print(f"deck written: {deck}")
 
 
-@main.command()
+@main.command("run")
 @click.argument("case_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
 @click.option("--output", "-o", type=click.Path(path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
 @click.option("--timeout", type=float, default=None, help="Stop the engine after this many seconds.")
-def run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
+def run_command(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
     """Run CASE_PATH and collect results.h5 and run.json."""
     _run(case_path, engine, output, timeout)
 
@@ -94,23 +98,28 @@ def run(case_path: Path, engine: str | None, output: Path | None, timeout: float
 @click.option("--json", "as_json", is_flag=True, help="Print the metrics as JSON.")
 def post(rundir: Path, as_json: bool) -> None:
     """Print summary metrics of a finished run (or avalanche study) directory."""
+    try:
+        _post(rundir, as_json)
+    except CaseError as error:
+        fail(str(error))
+    except DAMAGE as error:  # a truncated, empty or foreign file where a result should be
+        fail(f"{rundir}: damaged results ({bounded(f'{type(error).__name__}: {error}', 200)}); rerun the case", code=EXIT_DAMAGED)
+
+
+def _post(rundir: Path, as_json: bool) -> None:
     if (rundir / "report.json").exists():
         report = json.loads((rundir / "report.json").read_text())
-        try:
-            page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
-            if as_json:
-                console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
-            else:
-                console.print(study_table(rundir.name, report))
-                console.print(f"report: {page}")
-        except CaseError as error:
-            fail(str(error))
+        page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
+        if as_json:
+            console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
+        else:
+            console.print(study_table(rundir.name, report))
+            console.print(f"report: {page}")
         return
     path = rundir / RESULTS
     if not path.exists():
-        record = rundir / "run.json"
-        status = json.loads(record.read_text()).get("status", "unknown") if record.exists() else "unknown"
-        fail(f"{rundir} has no {RESULTS} (run status: {status})")
+        record = read_json(rundir / "run.json") or {}
+        fail(f"{rundir} has no {RESULTS} (run status: {bounded(str(record.get('status', 'unknown')), 40)})")
     trajectory = read_results(path)
     values = metrics.summary(trajectory)
     if as_json:
@@ -191,3 +200,19 @@ def build_contact(force: bool) -> None:
 
 for command in (avalanche, demo, campaign, collapse):
     main.add_command(command)
+
+
+def entry() -> None:
+    """The `demorch` entry point: every path ends with one line and a documented exit code; an
+    unexpected error too (exit 1), with its traceback only under `demorch --debug …`."""
+    debug = "--debug" in sys.argv[1:]
+    if debug:
+        sys.argv.remove("--debug")
+    try:
+        main(standalone_mode=True)
+    except Exception as error:  # noqa: BLE001 - the last guard before a user's terminal
+        if debug:
+            raise
+        errors.print(f"[bold red]error:[/] unexpected {type(error).__name__}: {bounded(str(error), 200)} "
+                     "(rerun with `demorch --debug …` for the traceback, and report it)", markup=True, highlight=False, soft_wrap=True)
+        sys.exit(EXIT_UNEXPECTED)

@@ -24,6 +24,7 @@ from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
 TAIL_LINES = 25
+CONTEXT_BEFORE, CONTEXT_AFTER = 8, 12  # lines kept around an engine's first error line
 
 ProgressCallback = Callable[[float, float], None]  # (simulated time, end time)
 
@@ -114,6 +115,33 @@ def require_executable(name: str, install_hint: str) -> str:
     return path
 
 
+class _LogScan:
+    """Reads an engine's output line by line: the tail, the first failure line with the lines around
+    it, and the simulated time for progress."""
+
+    def __init__(self, markers: tuple[str, ...], parse_progress: Callable[[str], float | None],
+                 progress: ProgressCallback | None, end_time: float):
+        self.markers, self.parse_progress, self.progress, self.end_time = markers, parse_progress, progress, end_time
+        self.tail: deque[str] = deque(maxlen=TAIL_LINES)
+        self.failure: str | None = None
+        self.context: list[str] | None = None  # the lines around the first failure line
+
+    def feed(self, line: str) -> None:
+        self.tail.append(line)
+        stripped = line.lstrip()
+        if self.failure is None and any(stripped.startswith(marker) for marker in self.markers):
+            self.failure = stripped
+            self.context = list(self.tail)[-CONTEXT_BEFORE:]  # what led to it; the lines after it follow
+        elif self.context is not None and len(self.context) < CONTEXT_BEFORE + CONTEXT_AFTER:
+            self.context.append(line)
+        simulated = self.parse_progress(line)
+        if simulated is not None:
+            if not math.isfinite(simulated):
+                self.failure = self.failure or f"non-finite value in engine output: {stripped}"
+            elif self.progress is not None:
+                self.progress(simulated, self.end_time)
+
+
 def run_engine(
     command: list[str],
     rundir: Path,
@@ -131,25 +159,14 @@ def run_engine(
     that is not finite. Returns the log tail for callers that check more (lost bodies, say).
     """
     log_path = rundir / LOG_NAME
-    tail: deque[str] = deque(maxlen=TAIL_LINES)
-    failure: str | None = None
+    scan = _LogScan(failure_markers, parse_progress, progress, end_time)
     timed_out = threading.Event()
     with open(log_path, "w", encoding="utf-8") as log:
         log.write(f"# command: {' '.join(command)}\n")
         log.flush()
         try:
-            process = subprocess.Popen(
-                command,
-                cwd=rundir,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.STDOUT,
-                stdin=subprocess.DEVNULL,
-                text=True,
-                errors="replace",
-                env=env,
-                bufsize=1,
-                preexec_fn=die_with_parent,
-            )
+            process = subprocess.Popen(command, cwd=rundir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                       text=True, errors="replace", env=env, bufsize=1, preexec_fn=die_with_parent)
         except OSError as error:
             raise EngineError(f"could not start {command[0]}: {error.strerror}", deck, log_path) from None
         assert process.stdout is not None
@@ -158,22 +175,14 @@ def run_engine(
             watchdog.start()
         for line in process.stdout:
             log.write(line)
-            line = line.rstrip("\n")
-            tail.append(line)
-            stripped = line.lstrip()
-            if failure is None and any(stripped.startswith(marker) for marker in failure_markers):
-                failure = stripped
-            simulated = parse_progress(line)
-            if simulated is not None:
-                if not math.isfinite(simulated):
-                    failure = failure or f"non-finite value in engine output: {stripped}"
-                elif progress is not None:
-                    progress(simulated, end_time)
+            scan.feed(line.rstrip("\n"))
         returncode = process.wait()
         if watchdog is not None:
             watchdog.cancel()
-    _raise_on_failure(failure, timeout if timed_out.is_set() else None, returncode, command, deck, log_path, list(tail))
-    return list(tail)
+    # A failed run's tail shows the lines around what went wrong, not the engine's closing statistics.
+    _raise_on_failure(scan.failure, timeout if timed_out.is_set() else None, returncode, command, deck, log_path,
+                      scan.context or list(scan.tail))
+    return list(scan.tail)
 
 
 def _raise_on_failure(failure: str | None, timed_out_after: float | None, returncode: int, command: list[str], deck: Path,

@@ -9,8 +9,10 @@ rule cannot express is a case error, reported before YADE starts.
 
 from __future__ import annotations
 
+import math
+
 from orchestrator.case import Case, CaseError
-from orchestrator.physics import PairConstants
+from orchestrator.physics import MIN_LINEAR_EN2, PairConstants, clipped_restitution
 
 RELATIVE_TOLERANCE = 1e-9
 
@@ -44,11 +46,7 @@ def split_in_series(case: Case, pairs: list[PairConstants], quantity: str) -> di
                 remainder = 1.0 / target - 1.0 / per_material[body]
                 candidate = 0.0 if abs(remainder) * target <= RELATIVE_TOLERANCE else (1.0 / remainder if remainder > 0 else -1.0)
             if candidate < 0:
-                raise CaseError(
-                    f"contacts ({body}/{name}).{_field(quantity)}: YADE combines per-material values in series, so a "
-                    f"body/wall value may not exceed twice the body's self-pair value "
-                    f"({target!r} > {per_material[body]!r}); allowed range: (0, {per_material[body]!r}]"
-                )
+                raise CaseError(_too_large(body, name, quantity, target, per_material[body], pairs))
             per_material.setdefault(name, candidate)
     for pair, target in value.items():
         names = sorted(pair) * (2 if len(pair) == 1 else 1)
@@ -62,6 +60,26 @@ def split_in_series(case: Case, pairs: list[PairConstants], quantity: str) -> di
                 f"(k_ab = k_a k_b / (k_a + k_b) with k_a = 2 k_aa) or run this case on LIGGGHTS"
             )
     return per_material
+
+
+def _too_large(body: str, wall: str, quantity: str, target: float, limit: float, pairs: list[PairConstants]) -> str:
+    """The error for a body/wall value above what the series rule allows, in the field the user wrote."""
+    head = f"contacts ({body}/{wall}).{_field(quantity)}: YADE combines per-material values in series"
+    if quantity != "cn":
+        ratio = "" if quantity == "kn" else " (k_t = kt_over_kn · k_n)"
+        return f"{head}, so a body/wall value may not exceed twice the body's self-pair value{ratio}; allowed range: (0, {limit:.6g}] (got {target:.6g})"
+    pair = next(p for p in pairs if frozenset(p.materials) == frozenset((body, wall)))
+    lowest = restitution_for_damping(limit, pair.kn, pair.reference_mass)
+    return (f"{head}, so a body/wall contact may not dissipate more than twice the body's own pair; "
+            f"allowed range: [{lowest:.4g}, 1] (got {pair.en2:.4g})")
+
+
+def restitution_for_damping(cn: float, kn: float, mass: float) -> float:
+    """e_n² of a clipped spring-dashpot (k_n, c_n) for reduced mass m: physics.linear_damping inverted."""
+    q = cn / (2.0 * math.sqrt(kn * mass))  # = r / sqrt(1 + r²), r = β / ω_d
+    if q >= 1.0:
+        return MIN_LINEAR_EN2
+    return clipped_restitution(q / math.sqrt(1.0 - q * q)) ** 2
 
 
 def _field(quantity: str) -> str:

@@ -1,0 +1,138 @@
+"""Physical checks of a valid case before any engine starts: what the field ranges cannot see.
+
+Each check raises CaseError with one line naming the field (and the body, by index) and what would
+do instead:
+- the time step against the shortest contact duration: an explicit engine needs several steps per
+  contact (MAX_STEP_FRACTION), or contacts are skipped and bodies leave at any speed;
+- initial speeds against the step: a body may cross at most a tenth of the smallest radius per step;
+- the output: frame count and results size, capped (MAX_FRAMES, MAX_RESULTS_BYTES);
+- the geometry: spheres overlapping each other (coincident ones included), spheres cut by a wall,
+  bodies outside an explicit domain.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from orchestrator import geometry, physics
+from orchestrator.case import Case, CaseError
+from orchestrator.engines.registry import capabilities
+
+MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
+MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
+MAX_FRAMES = 1_000_000
+MAX_RESULTS_BYTES = 4 * 2**30  # results.h5 holds 13 doubles per body and frame
+OVERLAP_TOLERANCE = 1e-3  # of the smaller radius: packings written to round-off may touch
+
+
+def check(case: Case, case_dir: Path) -> None:
+    """Raise CaseError for the first problem found; return when the case is fit to run."""
+    plan = physics.schedule(case)
+    check_step(case, plan.dt)
+    check_output(case, plan)
+    check_speeds(case, plan.dt)
+    check_geometry(case, case_dir)
+
+
+def check_step(case: Case, dt: float) -> None:
+    if case.time.step == "auto" or capabilities(case.engine).implicit:
+        return
+    duration = physics.shortest_contact_duration(case)
+    if dt > MAX_STEP_FRACTION * duration:
+        raise CaseError(f"time.step: {dt!r} s is more than {MAX_STEP_FRACTION:g} of the shortest contact ({duration:.3g} s), "
+                        f"so contacts would be missed; allowed range: (0, {MAX_STEP_FRACTION * duration:.3g}] (or step: auto)")
+
+
+def check_output(case: Case, plan: physics.Schedule) -> None:
+    frames = plan.frames + 1
+    size = frames * len(physics.bodies(case)) * 13 * 8
+    if frames > MAX_FRAMES or size > MAX_RESULTS_BYTES:
+        smallest = case.time.duration / min(MAX_FRAMES - 1, MAX_RESULTS_BYTES / (len(physics.bodies(case)) * 13 * 8) - 1)
+        raise CaseError(f"time.output_interval: {case.time.output_interval!r} s gives {frames} frames ({size / 2**30:.3g} GB of results); "
+                        f"allowed: at most {MAX_FRAMES} frames and {MAX_RESULTS_BYTES // 2**30} GB, an interval of at least {smallest:.3g} s")
+
+
+def check_speeds(case: Case, dt: float) -> None:
+    table = physics.bodies(case)
+    smallest = min(b.radius for b in table)
+    for index, body in enumerate(table):
+        speed = float(np.linalg.norm(body.velocity))
+        if speed * dt > MAX_TRAVEL_PER_STEP * smallest:
+            raise CaseError(f"{_body_field(case, index)}.velocity: {speed:.3g} m/s crosses {speed * dt:.3g} m per step, more than "
+                            f"{MAX_TRAVEL_PER_STEP:g} of the smallest radius ({smallest:.3g} m); allowed: at most "
+                            f"{MAX_TRAVEL_PER_STEP * smallest / dt:.3g} m/s at this step")
+
+
+def check_geometry(case: Case, case_dir: Path) -> None:
+    spheres = case.bodies.spheres
+    if spheres:
+        centres = np.array([s.position for s in spheres])
+        radii = np.array([s.radius for s in spheres])
+        glued = np.array([s.fixed for s in spheres])
+        _check_overlaps(centres, radii, glued)
+        for wall, triangles in zip(case.walls, (geometry.wall_triangles(w, case_dir) for w in case.walls)):
+            gaps = np.where(glued, np.inf, _distance_to_triangles(centres, triangles) - radii)  # glued: never moved by a wall
+            worst = int(np.argmin(gaps))
+            if gaps[worst] < -OVERLAP_TOLERANCE * radii[worst]:
+                raise CaseError(f"bodies.spheres.{worst}.position: the sphere cuts wall {wall.name!r} by {-gaps[worst]:.3g} m; "
+                                "move it off the wall (a sphere may touch a wall, not cross it)")
+    if case.domain is not None:
+        lower, upper = np.asarray(case.domain.lower), np.asarray(case.domain.upper)
+        for index, body in enumerate(physics.bodies(case)):
+            if np.any(np.asarray(body.position) < lower) or np.any(np.asarray(body.position) > upper):
+                raise CaseError(f"{_body_field(case, index)}.position: {list(body.position)} is outside domain "
+                                f"[{list(case.domain.lower)}, {list(case.domain.upper)}]; enlarge `domain:` or move the body")
+
+
+def _check_overlaps(centres: np.ndarray, radii: np.ndarray, glued: np.ndarray) -> None:
+    """Spheres that can touch may not overlap (glued ones never interact with each other)."""
+    tree = cKDTree(centres)
+    pairs = tree.query_pairs(2.0 * float(radii.max()), output_type="ndarray")
+    pairs = pairs[~(glued[pairs[:, 0]] & glued[pairs[:, 1]])] if len(pairs) else pairs
+    if not len(pairs):
+        return
+    gaps = np.linalg.norm(centres[pairs[:, 0]] - centres[pairs[:, 1]], axis=1) - radii[pairs].sum(axis=1)
+    allowed = -OVERLAP_TOLERANCE * radii[pairs].min(axis=1)
+    bad = np.flatnonzero(gaps < allowed)
+    if len(bad):
+        i, j = (int(k) for k in pairs[bad[np.argmin(gaps[bad])]])
+        raise CaseError(f"bodies.spheres.{j}.position: sphere {j} overlaps sphere {i} by {-float(gaps[bad].min()):.3g} m "
+                        f"({len(bad)} overlapping pairs); spheres may touch, not overlap")
+
+
+def _distance_to_triangles(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(n,) distance from each point to the nearest of the (t, 3, 3) triangles."""
+    best = np.full(len(points), np.inf)
+    for a, b, c in triangles:
+        best = np.minimum(best, _point_triangle_distance(points, a, b, c))
+    return best
+
+
+def _point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Distance from points p (n, 3) to triangle abc: the plane inside it, else the nearest edge."""
+    normal = np.cross(b - a, c - a)
+    area2 = float(np.linalg.norm(normal))
+    if area2 == 0.0:
+        return np.full(len(p), np.inf)
+    normal = normal / area2
+    height = (p - a) @ normal
+    foot = p - height[:, None] * normal
+    inside = np.ones(len(p), bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= (np.cross(v - u, foot - u) @ normal) >= 0.0
+    edges = np.min([_point_segment_distance(p, u, v) for u, v in ((a, b), (b, c), (c, a))], axis=0)
+    return np.where(inside, np.abs(height), edges)
+
+
+def _point_segment_distance(p: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    d = v - u
+    t = np.clip(((p - u) @ d) / float(d @ d), 0.0, 1.0)
+    return np.linalg.norm(p - (u + t[:, None] * d), axis=1)
+
+
+def _body_field(case: Case, index: int) -> str:
+    count = len(case.bodies.spheres)
+    return f"bodies.spheres.{index}" if index < count else f"bodies.clumps.{index - count}"
