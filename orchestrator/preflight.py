@@ -25,7 +25,9 @@ MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contac
 MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
 MAX_FRAMES = 1_000_000
 MAX_RESULTS_BYTES = 4 * 2**30  # results.h5 holds 13 doubles per body and frame
-OVERLAP_TOLERANCE = 1e-3  # of the smaller radius: packings written to round-off may touch
+# Of the smaller radius: a settled packing carries its contact overlaps (m g / k_n, about 1e-3 of a
+# radius in the shipped set-ups) into the release; coincident or deeply nested spheres are typos.
+OVERLAP_TOLERANCE = 0.05
 
 
 def check(case: Case, case_dir: Path) -> None:
@@ -56,6 +58,8 @@ def check_output(case: Case, plan: physics.Schedule) -> None:
 
 
 def check_speeds(case: Case, dt: float) -> None:
+    if capabilities(case.engine).implicit:  # contact dynamics finds contacts over the whole step
+        return
     table = physics.bodies(case)
     smallest = min(b.radius for b in table)
     for index, body in enumerate(table):

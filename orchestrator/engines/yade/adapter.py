@@ -11,10 +11,11 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from orchestrator import physics
 from orchestrator.bricks import world_sphere_centres
-from orchestrator.case import Case, ContactLaw, Sphere
+from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
@@ -59,9 +60,11 @@ class YadeAdapter(AdapterDefaults):
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
+        boxes = [rectangle_box(wall) for wall in case.walls if rectangle_box(wall) is not None]
         facets = [
             (wall.name, wall.material, *[tuple(float(c) for c in vertex) for vertex in triangle])
             for wall, triangles in zip(case.walls, prepared.wall_triangles)
+            if rectangle_box(wall) is None
             for triangle in triangles
         ]
         spheres = [
@@ -91,6 +94,7 @@ class YadeAdapter(AdapterDefaults):
             "spheres": spheres,
             "clumps": clumps,
             "facets": facets,
+            "boxes": boxes,
             "removals": _removals(case, prepared.schedule),
             "rest": common.rest_settings(case, prepared.schedule),
         }
@@ -112,6 +116,21 @@ class YadeAdapter(AdapterDefaults):
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
         return common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
+
+
+def rectangle_box(wall: Wall) -> tuple[str, str, list[float], list[float], list[float]] | None:
+    """A rectangle wall with edges at right angles as YADE's flat box (name, material, centre, half
+    extents, orientation w, x, y, z); None for a mesh or a parallelogram (those stay facets)."""
+    if not isinstance(wall, RectangleWall):
+        return None
+    a, b = np.asarray(wall.edge1, float), np.asarray(wall.edge2, float)
+    la, lb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+    if abs(float(a @ b)) > 1e-9 * la * lb:
+        return None
+    axes = np.column_stack([a / la, b / lb, np.cross(a, b) / (la * lb)])
+    x, y, z, w = Rotation.from_matrix(axes).as_quat()
+    centre = np.asarray(wall.origin, float) + 0.5 * (a + b)
+    return (wall.name, wall.material, centre.tolist(), [0.5 * la, 0.5 * lb, 0.0], [float(w), float(x), float(y), float(z)])
 
 
 def _removals(case: Case, plan: physics.Schedule) -> list[tuple[int, list[str]]]:
