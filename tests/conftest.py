@@ -8,8 +8,10 @@ below enforces; `-m slow` selects the long studies left out of the default run.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +21,9 @@ from orchestrator.bricks import BrickClump
 from orchestrator.case import Case, parse_case
 from orchestrator.studies.avalanche.packing import loose_grid
 from orchestrator.studies.avalanche.study import AvalancheStudy
+
+# Hypothesis keeps its files out of the checkout (no test writes there).
+os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY", tempfile.mkdtemp(prefix="demorch-hypothesis-"))
 
 requires_liggghts = pytest.mark.skipif(shutil.which("liggghts") is None, reason="LIGGGHTS not installed (run scripts/setup.sh)")
 requires_yade = pytest.mark.skipif(shutil.which("yade") is None, reason="YADE not installed (run scripts/setup.sh)")

@@ -196,7 +196,7 @@ JSONISH = st.recursive(st.none() | st.booleans() | FINITE | st.integers() | st.t
                        max_leaves=30)
 
 
-@settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=150, deadline=2000, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(changes=st.dictionaries(st.sampled_from(["name", "engine", "seed", "time", "gravity", "materials", "contacts", "bodies",
                                                 "walls", "domain", "shapes", "planar", "save_state", "initial_state"]), JSONISH, max_size=3))
 def test_any_case_validates_or_raises_the_project_error(changes: dict[str, Any]) -> None:
@@ -212,7 +212,7 @@ def test_any_case_validates_or_raises_the_project_error(changes: dict[str, Any])
     assert time.perf_counter() - started < 2.0
 
 
-@settings(max_examples=100, deadline=2000)
+@settings(max_examples=100, deadline=2000, database=None)
 @given(spec=st.dictionaries(st.sampled_from(["name", "base", "kind", "engine", "designs", "replicates", "derived", "timeout_s"]), JSONISH, max_size=4))
 def test_any_campaign_spec_validates_or_raises_the_project_error(spec: dict[str, Any]) -> None:
     from orchestrator.validation import parse_model
