@@ -148,7 +148,9 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
     builds: dict[str, dict[str, Any]] = {}
     for parameters, case in expand(spec, base):
         engine = case.engine.value
-        identifier = rundir.run_id(case, builds.setdefault(engine, rundir.build_stamp(engine)))
+        if engine not in builds:  # once per engine: it hashes the templates and the plugin sources
+            builds[engine] = rundir.build_stamp(engine)
+        identifier = rundir.run_id(case, builds[engine])
         points[identifier] = parameters
         cases[identifier] = case
     store.write_points(campaign_dir, points)

@@ -60,11 +60,12 @@ class YadeAdapter(AdapterDefaults):
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
-        boxes = [rectangle_box(wall) for wall in case.walls if rectangle_box(wall) is not None]
+        as_boxes = [rectangle_box(wall) for wall in case.walls]
+        boxes = [box for box in as_boxes if box is not None]
         facets = [
             (wall.name, wall.material, *[tuple(float(c) for c in vertex) for vertex in triangle])
-            for wall, triangles in zip(case.walls, prepared.wall_triangles)
-            if rectangle_box(wall) is None
+            for wall, triangles, box in zip(case.walls, prepared.wall_triangles, as_boxes)
+            if box is None
             for triangle in triangles
         ]
         spheres = [
