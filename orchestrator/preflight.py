@@ -7,11 +7,13 @@ do instead:
 - initial speeds against the step: a body may cross at most a tenth of the smallest radius per step;
 - the output: frame count and results size, capped (MAX_FRAMES, MAX_RESULTS_BYTES);
 - the geometry: spheres overlapping each other (coincident ones included), spheres cut by a wall,
-  bodies outside an explicit domain.
+  bodies outside an explicit domain;
+- the initial state: a state file the engine wrote (`save_state`) for a completed run.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +22,7 @@ from scipy.spatial import cKDTree
 from orchestrator import geometry, physics
 from orchestrator.case import Case, CaseError
 from orchestrator.engines.registry import capabilities
+from orchestrator.results import CASE_COPY, RUN_RECORD
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
 MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
@@ -37,6 +40,7 @@ def check(case: Case, case_dir: Path) -> None:
     check_output(case, plan)
     check_speeds(case, plan.dt)
     check_geometry(case, case_dir)
+    check_initial_state(case, case_dir)
 
 
 def check_step(case: Case, dt: float) -> None:
@@ -89,6 +93,29 @@ def check_geometry(case: Case, case_dir: Path) -> None:
             if np.any(np.asarray(body.position) < lower) or np.any(np.asarray(body.position) > upper):
                 raise CaseError(f"{_body_field(case, index)}.position: {list(body.position)} is outside domain "
                                 f"[{list(case.domain.lower)}, {list(case.domain.upper)}]; enlarge `domain:` or move the body")
+
+
+def check_initial_state(case: Case, case_dir: Path) -> None:
+    """`initial_state` must be the state file of a completed run of this package that saved it
+    (`save_state: true`), written by the case's engine: any other file is refused, never read."""
+    if case.initial_state is None:
+        return
+    source = case_dir / case.initial_state
+    name = capabilities(case.engine).state_file
+    if not source.is_file():
+        raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
+    record, saved = _read_json(source.parent / RUN_RECORD), _read_json(source.parent / CASE_COPY)
+    if source.name != name or record.get("status") != "completed" or not saved.get("save_state"):
+        raise CaseError(f"initial_state: {source} is not a state this package wrote: give the {name} of a completed run "
+                        "made with `save_state: true`")
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 def _check_overlaps(centres: np.ndarray, radii: np.ndarray, glued: np.ndarray) -> None:

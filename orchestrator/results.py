@@ -28,6 +28,10 @@ import h5py
 import numpy as np
 
 FORMAT_VERSION = 1
+# What a run directory holds besides this file (rundir.py writes and checks them).
+RESULTS = "results.h5"
+RUN_RECORD = "run.json"  # the record: run_id, build, status, timings, metrics
+CASE_COPY = "case.json"  # the validated inputs, canonical JSON
 
 # dataset → (dtype kind, rank): f float, i integer, S bytes
 LAYOUT: dict[str, tuple[str, int]] = {

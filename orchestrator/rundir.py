@@ -35,10 +35,8 @@ from pydantic import BaseModel
 
 from orchestrator.case import Case
 from orchestrator.engines import get_adapter
+from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD
 
-RUN_RECORD = "run.json"
-RESULTS = "results.h5"
-CASE_COPY = "case.json"
 LOCK = ".lock"
 ATTIC = "attic"
 STATUSES = ("pending", "running", "completed", "failed", "stale", "incomplete")

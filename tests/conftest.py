@@ -7,18 +7,23 @@ below enforces; `-m slow` selects the long studies left out of the default run.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
 import subprocess
 import tempfile
+import time
+import tracemalloc
 from pathlib import Path
 from typing import Any
 
 import pytest
+from click.testing import CliRunner
 
 from orchestrator.bricks import BrickClump
 from orchestrator.case import Case, parse_case
+from orchestrator.cli.main import main
 from orchestrator.studies.avalanche.packing import loose_grid
 from orchestrator.studies.avalanche.study import AvalancheStudy
 
@@ -165,3 +170,35 @@ def engines_only_in_marked_tests(request: pytest.FixtureRequest, monkeypatch: py
         return real(args, *rest, **options)
 
     monkeypatch.setattr(subprocess, "Popen", guarded)
+
+
+# Hostile input through the CLI: shared by the hostile-input tests.
+def case_data(**changes: Any) -> dict[str, Any]:
+    data = json.loads(free_fall_case("liggghts").model_dump_json())
+    for path, value in changes.items():
+        node = data
+        *parents, last = path.split("__")
+        for part in parents:
+            node = node[int(part)] if part.isdigit() else node[part]
+        node[int(last) if last.isdigit() else last] = value
+    return data
+
+
+def run_cli(arguments: list[str]) -> tuple[int, str, float, int]:
+    """(exit code, output, seconds, peak bytes of Python allocations)."""
+    tracemalloc.start()
+    started = time.perf_counter()
+    result = CliRunner().invoke(main, arguments)
+    seconds = time.perf_counter() - started
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return result.exit_code, result.output, seconds, peak
+
+
+def assert_one_line_error(code: int, output: str, seconds: float, peak: int, expected_code: int, field: str) -> None:
+    assert code == expected_code, output
+    lines = [line for line in output.strip().splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:"), output
+    assert field in lines[0], output
+    assert "Traceback" not in output
+    assert seconds < 5.0 and peak < 500 * 2**20, (seconds, peak)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import time
-import tracemalloc
 from pathlib import Path
 from typing import Any
 
@@ -25,40 +24,9 @@ from orchestrator.case import CaseError, load_case, parse_case
 from orchestrator.cli.main import main
 from orchestrator.engines.yade.materials import split_in_series
 
-from conftest import free_fall_case
+from conftest import assert_one_line_error, case_data, run_cli
 
 BALL = {"material": "glass", "radius": 0.005}
-
-
-def case_data(**changes: Any) -> dict[str, Any]:
-    data = json.loads(free_fall_case("liggghts").model_dump_json())
-    for path, value in changes.items():
-        node = data
-        *parents, last = path.split("__")
-        for part in parents:
-            node = node[int(part)] if part.isdigit() else node[part]
-        node[int(last) if last.isdigit() else last] = value
-    return data
-
-
-def run_cli(arguments: list[str]) -> tuple[int, str, float, int]:
-    """(exit code, output, seconds, peak bytes of Python allocations)."""
-    tracemalloc.start()
-    started = time.perf_counter()
-    result = CliRunner().invoke(main, arguments)
-    seconds = time.perf_counter() - started
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    return result.exit_code, result.output, seconds, peak
-
-
-def assert_one_line_error(code: int, output: str, seconds: float, peak: int, expected_code: int, field: str) -> None:
-    assert code == expected_code, output
-    lines = [line for line in output.strip().splitlines() if line.strip()]
-    assert len(lines) == 1 and lines[0].startswith("error:"), output
-    assert field in lines[0], output
-    assert "Traceback" not in output
-    assert seconds < 5.0 and peak < 500 * 2**20, (seconds, peak)
 
 
 ALIAS_BOMB = "name: x\na: &a [1,1,1,1,1,1,1,1,1]\n" + "".join(

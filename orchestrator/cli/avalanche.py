@@ -49,7 +49,7 @@ def study_table(title: str, report: dict[str, Any]) -> Table:
 @click.command()
 @click.argument("study_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
 @click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where settled packings are kept and reused (default: beside the study directory, in packings/).")
 def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None) -> None:
     """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references."""
@@ -85,7 +85,7 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
 
 @click.command()
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Engine (default: LIGGGHTS).")
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory.")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Study directory.")
 @click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where packings are kept and reused.")
 @click.pass_context
 def demo(context: click.Context, engine: str | None, output: Path | None, packings: Path | None) -> None:

@@ -21,7 +21,7 @@ def campaign() -> None:
 
 @campaign.command("run")
 @click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Campaign directory (default runs/campaigns/NAME).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Campaign directory (default runs/campaigns/NAME).")
 @click.option("--jobs", "-j", type=int, default=None, help="Parallel engine processes (default: one per core).")
 @click.option("--executor", type=click.Choice(["local", "dask"]), default="local", show_default=True)
 @click.option("--dask-address", help="Scheduler address of an existing Dask cluster (e.g. started by dask-jobqueue).")
@@ -40,7 +40,8 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
     directory = output or Path("runs") / "campaigns" / spec.name
     workers = jobs or os.cpu_count() or 1
     failures: list[str] = []
-    with Progress(TextColumn("[bold]{task.fields[name]}[/]"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:
+    with Progress(TextColumn("[bold]{task.fields[name]}[/]"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
+                  transient=True) as progress:  # the tally line below stays; an error stays one line
         task = progress.add_task("planning", total=None, name=spec.name)
 
         def update(counts: Any, summary: dict[str, Any] | None) -> None:
@@ -75,7 +76,7 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
 
 @campaign.command("calibrate")
 @click.argument("calibration_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Calibration directory (default runs/calibrations/NAME).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Calibration directory (default runs/calibrations/NAME).")
 def campaign_calibrate(calibration_file: Path, output: Path | None) -> None:
     """Fit contact parameters to measured launches (E2 corner error); resumable, history kept."""
     from orchestrator.campaign.calibrate import calibrate, load_calibration

@@ -11,7 +11,7 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from orchestrator.case import CaseError
+from orchestrator.case import CaseError, with_engine
 from orchestrator.cli.common import console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
 
@@ -64,11 +64,11 @@ def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
 @collapse.command("run")
 @click.argument("study_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
 @click.option("--preparations", type=click.Path(file_okay=False, path_type=Path), help="Where prepared columns are kept and reused.")
 def run_command(study_path: Path, engine: str | None, output: Path | None, preparations: Path | None) -> None:
     """Rain the column (or reuse it), release it down the channel, report the front and the bed."""
-    from orchestrator.studies.collapse.spec import load_collapse, with_engine
+    from orchestrator.studies.collapse.spec import load_collapse
     from orchestrator.studies.collapse.study import run_collapse
 
     try:
@@ -88,13 +88,13 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
 @collapse.command("calibrate")
 @click.argument("study_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Calibration directory (default runs/calibration-NAME-ENGINE).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Calibration directory (default runs/calibration-NAME-ENGINE).")
 @click.option("--mu-range", nargs=2, type=float, default=(0.1, 0.9), show_default=True, help="Bracket of μ to bisect.")
 @click.option("--max-runs", type=click.IntRange(1, 50), default=8, show_default=True)
 @click.option("--check-engine", type=click.Choice(ENGINE_NAMES), help="Also run the calibrated μ on this engine and compare the runouts.")
 def calibrate_command(study_path: Path, engine: str | None, output: Path | None, mu_range: tuple[float, float], max_runs: int, check_engine: str | None) -> None:
     """Find μ that puts the horizontal-collapse runout on the quasi-2D law ΔL/L0 = 1.2 a (± 20 %)."""
-    from orchestrator.studies.collapse.spec import load_collapse, with_engine
+    from orchestrator.studies.collapse.spec import load_collapse
     from orchestrator.studies.collapse.calibrate import calibrate_mu, with_mu
     from orchestrator.studies.collapse.study import run_collapse
 

@@ -34,6 +34,23 @@ errors = Console(stderr=True)
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
+class OneLineErrors(click.Group):
+    """A command group whose usage errors (unknown option, bad choice, missing argument) print one
+    line, `error: …`, like every other error, instead of click's usage block; exit code 2."""
+
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except click.exceptions.Abort:
+            fail("interrupted", code=EXIT_UNEXPECTED)
+        except click.ClickException as error:
+            where = f" (see `{error.ctx.command_path} --help`)" if getattr(error, "ctx", None) is not None else ""
+            fail(f"{error.format_message()}{where}", code=error.exit_code)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
 def fail(message: str, code: int = 2) -> None:
     errors.print(f"[bold red]error:[/] {message}", markup=True, highlight=False, soft_wrap=True)
     sys.exit(code)

@@ -20,7 +20,7 @@ from orchestrator.case import CaseError, load_case, with_engine
 from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
-from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
+from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import MPI_ENV, RunOptions
 from orchestrator import preflight
@@ -58,7 +58,7 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
     return record
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="dem-orchestrator")
 @click.option("--mpi", type=click.IntRange(1, 256), default=None, metavar="N",
               help=f"Run each engine that can split a run over MPI (LIGGGHTS) as `mpirun -np N` (default: ${MPI_ENV}, else 1; "
@@ -72,7 +72,7 @@ def main(context: click.Context, mpi: int | None) -> None:
 @main.command()
 @click.argument("case_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
-@click.option("--output", "-o", type=click.Path(path_type=Path), required=True, help="Directory for the deck.")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), required=True, help="Directory for the deck.")
 def render(case_path: Path, engine: str | None, output: Path) -> None:
     """Write the engine deck for CASE_PATH without running it."""
     try:
@@ -86,7 +86,7 @@ def render(case_path: Path, engine: str | None, output: Path) -> None:
 @main.command("run")
 @click.argument("case_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
-@click.option("--output", "-o", type=click.Path(path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
 @click.option("--timeout", type=float, default=None, help="Stop the engine after this many seconds.")
 def run_command(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
     """Run CASE_PATH and collect results.h5 and run.json."""

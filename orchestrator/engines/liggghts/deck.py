@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import shutil
 from pathlib import Path
 
 import numpy as np
 
 from orchestrator import geometry, physics
-from orchestrator.case import Case, CaseError, Domain
+from orchestrator.case import Case, Domain
 from orchestrator.engines import common
 from orchestrator.engines.templating import render
 
@@ -134,28 +133,12 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
 
 def link_initial_state(source: Path, target: Path) -> None:
     """Copy the state file a case starts from into its run directory (the run then holds everything
-    its deck reads, even if the packing it came from is deleted).
-
-    Only a state LIGGGHTS wrote for this package is taken: a `state.restart` beside the run.json of a
-    completed run that saved its state. A copy, never a link: the source stays untouched.
+    its deck reads, even if the packing it came from is deleted). preflight.check_initial_state has
+    made sure it is a state LIGGGHTS wrote for this package. A copy, never a link: the source stays
+    untouched.
     """
-    if not source.is_file():
-        raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
-    record = _read_json(source.parent / "run.json")
-    saved = _read_json(source.parent / "case.json")
-    if source.name != STATE_NAME or record.get("status") != "completed" or not saved.get("save_state"):
-        raise CaseError(f"initial_state: {source} is not a state this package wrote: give the {STATE_NAME} of a completed run "
-                        "made with `save_state: true`")
     target.unlink(missing_ok=True)
     shutil.copyfile(source, target)
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
 
 
 def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
