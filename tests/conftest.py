@@ -8,7 +8,6 @@ below enforces; `-m slow` selects the long studies left out of the default run.
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -51,40 +50,6 @@ def free_fall_case(engine: str) -> Case:
             "materials": [{"name": "glass", "density": 2500.0}],
             "contacts": [{"materials": ["glass", "glass"], "en2": 0.5, "mu": 0.5, "kn": 1e5, "kt_over_kn": 0.4}],
             "bodies": {"spheres": [{"material": "glass", "radius": 0.005, "position": [0.0, 0.0, 1.0]}]},
-        }
-    )
-
-
-def slope_vectors(angle_deg: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Unit vectors down the slope and normal to it, for a slope descending towards +x."""
-    a = math.radians(angle_deg)
-    return (math.cos(a), 0.0, -math.sin(a)), (math.sin(a), 0.0, math.cos(a))
-
-
-def sliding_case(engine: str, angle_deg: float = 30.0, mu: float = 0.2, duration: float = 0.25, law: str = "linear") -> Case:
-    """A sphere that cannot rotate, resting on an inclined rectangle: it slides like a block."""
-    down, normal = slope_vectors(angle_deg)
-    radius = 0.005
-    start = tuple(0.05 * d + radius * n for d, n in zip(down, normal))
-    contact = {"law": law, "en2": 0.5, "mu": mu, "kn": 1e5, "kt_over_kn": 0.4}
-    return parse_case(
-        {
-            "name": "slide",
-            "engine": engine,
-            "time": {"duration": duration, "output_interval": 0.01},
-            "materials": [{"name": "ball", "density": 2500.0}, {"name": "board", "density": 1000.0}],
-            "contacts": [{"materials": ["ball", "ball"], **contact}, {"materials": ["ball", "board"], **contact}],
-            "bodies": {"spheres": [{"material": "ball", "radius": radius, "position": start, "fixed_rotation": True}]},
-            "walls": [
-                {
-                    "type": "rectangle",
-                    "name": "slope",
-                    "material": "board",
-                    "origin": (0.0, -0.1, 0.0),
-                    "edge1": tuple(1.0 * d for d in down),
-                    "edge2": (0.0, 0.2, 0.0),
-                }
-            ],
         }
     )
 

@@ -26,7 +26,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("orchestrator.engines",),
     ("orchestrator.rundir",),
     ("orchestrator.runner",),
-    ("orchestrator.studies",),
+    ("orchestrator.studies", "orchestrator.parity"),
     ("orchestrator.campaign",),
     ("orchestrator.cli",),
 ]

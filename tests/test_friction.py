@@ -1,4 +1,6 @@
-"""Coulomb friction: a block (rotation-locked sphere, and a clumped brick) on an incline sticks below μ and slides above it."""
+"""Coulomb friction: a block (rotation-locked sphere, and a clumped brick) on an incline sticks below μ and slides above it.
+
+The linear law's block is a case of the parity matrix (tests/test_parity.py); here the bilinear law's."""
 
 from __future__ import annotations
 
@@ -11,8 +13,9 @@ import pytest
 from orchestrator.case import Case, parse_case
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
+from orchestrator.parity import slope_vectors, sliding_case
 
-from conftest import engine_params, slope_vectors, sliding_case
+from conftest import engine_params
 
 MU = 0.46  # brick/support, Richefeu et al. (2012)
 
@@ -26,7 +29,7 @@ def downslope_acceleration(trajectory: Trajectory, angle_deg: float, start: floa
     return float(fitted), 9.81 * (math.sin(math.radians(angle_deg)) - MU * math.cos(math.radians(angle_deg)))
 
 
-@pytest.mark.parametrize("law", ["linear", "bilinear"])
+@pytest.mark.parametrize("law", ["bilinear"])
 @pytest.mark.parametrize("engine", engine_params())
 def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, law: str, tmp_path: Path) -> None:
     angle = math.degrees(math.atan(MU - 0.02))
@@ -40,7 +43,7 @@ def test_block_sticks_when_tan_alpha_is_below_mu(engine: str, law: str, tmp_path
     assert np.linalg.norm(trajectory.velocity[-1, 0]) < 1e-4
 
 
-@pytest.mark.parametrize("law", ["linear", "bilinear"])
+@pytest.mark.parametrize("law", ["bilinear"])
 @pytest.mark.parametrize("engine", engine_params())
 def test_block_slides_with_kinetic_acceleration_above_mu(engine: str, law: str, tmp_path: Path) -> None:
     angle = math.degrees(math.atan(MU + 0.05))

@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from orchestrator.physics import contact_duration, linear_damping, schedule
+from orchestrator.parity import sliding_case
 
-from conftest import sliding_case
 
 
 @pytest.mark.parametrize("en2", [0.13, 0.53, 0.9])

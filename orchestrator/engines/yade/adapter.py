@@ -19,7 +19,7 @@ from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
-from orchestrator.engines.yade.materials import yade_materials
+from orchestrator.engines.yade.materials import GLUED, glued_clones, yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
@@ -69,7 +69,8 @@ class YadeAdapter(AdapterDefaults):
             for triangle in triangles
         ]
         spheres = [
-            (s.material, s.radius, s.position, s.velocity, s.angular_velocity, _blocked_dofs(s, case.planar), not s.fixed)
+            (GLUED.format(s.material) if s.fixed else s.material, s.radius, s.position, s.velocity, s.angular_velocity,
+             _blocked_dofs(s, case.planar), not s.fixed)
             for s in case.bodies.spheres
         ]
         clumps = []
@@ -82,6 +83,13 @@ class YadeAdapter(AdapterDefaults):
             )
         touching = case.touching_pairs()
         friction = [(p.materials[0], p.materials[1], p.mu) for p in prepared.pairs if frozenset(p.materials) in touching]
+        materials = yade_materials(case, prepared.pairs)
+        clones = glued_clones(case, prepared.pairs, materials)
+        for clone in clones:  # a glued clone meets what its material meets, with the same friction
+            name = str(clone["name"]).split("~")[0]
+            glued = GLUED.format(name)
+            friction += [pair for a, b, mu in friction if name in (a, b)
+                         for pair in {(glued if a == name else a, b, mu), (a, glued if b == name else b, mu)} if pair != (a, b, mu)]
         data = {
             "seed": case.seed,
             "dt": prepared.schedule.dt,
@@ -90,7 +98,7 @@ class YadeAdapter(AdapterDefaults):
             "output_every": prepared.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
             "frames_file": FRAMES_NAME,
-            "materials": yade_materials(case, prepared.pairs),
+            "materials": materials + clones,
             "friction": friction,
             "spheres": spheres,
             "clumps": clumps,

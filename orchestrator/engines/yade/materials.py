@@ -5,6 +5,11 @@ YADE gives every body one material and combines two materials' stiffness and dam
 solve for per-material values that reproduce every touching pair: a body material gets twice its
 self-pair value, a wall material what is left for each body/wall pair. A combination the series
 rule cannot express is a case error, reported before YADE starts.
+
+A glued (fixed) sphere gives its partner the whole contact: the dashpot must be sized for the
+partner's mass, not for the reduced mass of two moving bodies (which under-damps: e² 0.632 for
+0.53 on a sphere landing on a glued one). Glued spheres therefore get a clone of their material
+(GLUED) whose damping makes each moving/glued pair come out at the partner's mass.
 """
 
 from __future__ import annotations
@@ -12,9 +17,10 @@ from __future__ import annotations
 import math
 
 from orchestrator.case import Case, CaseError
-from orchestrator.physics import MIN_LINEAR_EN2, PairConstants, clipped_restitution
+from orchestrator.physics import MIN_LINEAR_EN2, PairConstants, clipped_restitution, linear_damping, reference_masses
 
 RELATIVE_TOLERANCE = 1e-9
+GLUED = "{}~glued"  # the YADE material of a body material's glued spheres (no case name has a '~')
 
 
 def series(a: float, b: float) -> float:
@@ -104,3 +110,32 @@ def yade_materials(case: Case, pairs: list[PairConstants]) -> list[dict[str, obj
             }
         )
     return result
+
+
+def glued_clones(case: Case, pairs: list[PairConstants], rows: list[dict[str, object]]) -> list[dict[str, object]]:
+    """ViscElMat arguments of the GLUED clone of each material that has glued spheres: the material's
+    own stiffness, and the damping that gives every damped pair with a moving body of material X
+    the dashpot of X's mass alone (series rule: 1/c = 1/c_X + 1/c_clone)."""
+    by_name = {row["name"]: row for row in rows}
+    masses = reference_masses(case)
+    glued = sorted({s.material for s in case.bodies.spheres if s.fixed})
+    moving = {s.material for s in case.bodies.spheres if not s.fixed} | {c.material for c in case.bodies.clumps}
+    clones = []
+    for name in glued:
+        candidates = []
+        for pair in pairs:
+            others = [m for m in pair.materials if m != name] or [name]
+            if name not in pair.materials or others[0] not in moving or not pair.cn:
+                continue
+            partner = others[0]
+            target = linear_damping(pair.kn, pair.en2, masses[partner])
+            remainder = 1.0 / target - 1.0 / float(by_name[partner]["cn"])
+            if remainder <= 0.0:
+                raise CaseError(f"contacts ({partner}/{name}).en2: YADE cannot damp a body landing on a glued sphere enough "
+                                "with the series rule; run this case on LIGGGHTS")
+            candidates.append(1.0 / remainder)
+        if candidates and not all(_close(c, candidates[0]) for c in candidates):
+            raise CaseError(f"materials ({name}): its glued spheres meet bodies of several masses, which YADE's per-material "
+                            "damping cannot all reproduce; run this case on LIGGGHTS")
+        clones.append({**by_name[name], "name": GLUED.format(name), "cn": candidates[0] if candidates else by_name[name]["cn"]})
+    return clones
