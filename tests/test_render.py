@@ -18,7 +18,7 @@ from orchestrator.engines.templating import data_literal, environment
 from orchestrator.case import with_engine
 from orchestrator.runner import render_case
 
-from conftest import sliding_case
+from orchestrator.parity import sliding_case
 
 
 @pytest.mark.parametrize("value", [0.1, 1e-17, 123456.789, -2.5e300, 0, 7, "it's \"quoted\"\nnewline", ["a", 1.5], [1, [2, 3]], {"k": None, "b": True}])
