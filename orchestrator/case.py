@@ -11,18 +11,17 @@ from enum import Enum
 from pathlib import Path
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from orchestrator.bricks import BrickClump, brick_clump
 from orchestrator.engines.registry import DEFAULT_ENGINE, Engine, capabilities
 from orchestrator.engines.settings import EngineSections
-from orchestrator.validation import CaseError, ModelT, format_error, parse_model, read_yaml  # noqa: F401  (re-exported)
+from orchestrator.validation import CaseError, parse_model, read_yaml  # noqa: F401  (CaseError re-exported)
 
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
 # inert there and makes quotes, spaces and newlines a validation error rather than an injection.
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]{0,39}$"
 Name = Annotated[str, Field(pattern=NAME_PATTERN)]
-
 
 
 def _reject_bool(value: object) -> object:
@@ -149,14 +148,19 @@ class BrickShape(Strict):
     thickness: Real(gt=0.0, le=10.0)
     layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
     bevel_deg: Real(ge=0.0, le=10.0) = 0.0
-    # The body's true mass (kg) and principal moments of inertia (kg m², about the length, width and
-    # thickness axes), when the solid is not the sharp box: the 2012 study's brick, rounded at 1 mm,
-    # has V = 3.6749852e-6 m³ and I/m = (2.36912e-5, 8.45563e-5, 9.77668e-5) m². Default: the box's.
+    # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
+    # thickness axes) when given; default: those of the (rounded) box at the material's density.
     mass: Real(gt=0.0, le=1e4) | None = None
     inertia: tuple[Real(gt=0.0, le=1e4), Real(gt=0.0, le=1e4), Real(gt=0.0, le=1e4)] | None = None
+    # Edges and corners rounded at this radius (m): eight corner spheres join the layout (bricks.py).
+    # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
+    rounding: Real(ge=0.0, le=1.0) = 0.0
 
     @model_validator(mode="after")
     def _physical_inertia(self) -> "BrickShape":
+        limit = min(self.length, self.width, self.thickness) / 2.0
+        if self.rounding and (self.bevel_deg or self.rounding >= limit):
+            raise ValueError(f"rounding: needs bevel_deg 0; allowed range: [0, {limit:g}) (got {self.rounding!r})")
         if self.inertia is not None:
             a, b, c = sorted(self.inertia)
             if c > a + b:
@@ -164,7 +168,7 @@ class BrickShape(Strict):
         return self
 
     def clump(self, density: float) -> BrickClump:
-        return brick_clump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg, self.mass, self.inertia)
+        return brick_clump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg, self.mass, self.inertia, self.rounding)
 
 
 class Clump(Strict):
@@ -381,17 +385,6 @@ def parse_case(data: object, source: str = "case") -> Case:
     if not isinstance(data, dict):
         raise CaseError(f"{source}: the case must be a mapping of fields, got {type(data).__name__}")
     return parse_model(Case, data, source)
-
-
-def with_engine(model: ModelT, engine: str | None, source: str = "case") -> ModelT:
-    """A case or study on another engine (`-e`), validated again (the engine may not run it);
-    None keeps its own. Raises CaseError naming the field the engine cannot take."""
-    if engine is None:
-        return model
-    try:
-        return type(model).model_validate({**model.model_dump(mode="json"), "engine": engine})
-    except ValidationError as error:
-        raise CaseError(f"{source} on {engine}: {format_error(error, Case)}") from None
 
 
 def load_case(path: str | Path) -> Case:

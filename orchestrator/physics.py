@@ -43,8 +43,7 @@ def bodies(case: Case) -> list[BodyInfo]:
     for c in case.bodies.clumps:
         shape = case.shape(c.shape)
         clump = shape.clump(case.material(c.material).density)
-        nx, ny, nz = shape.layout
-        faces = max(nx * ny, nx * nz, ny * nz)
+        faces = clump.face_contacts
         inertia = tuple(float(i) for i in clump.principal_inertia)
         table.append(BodyInfo(c.material, clump.mass, clump.bounding_radius, c.position, c.velocity, faces, inertia))
     return table

@@ -160,3 +160,14 @@ def read_yaml(path: str | Path, what: str = "case file") -> object:
         raise CaseError(f"{path}: not valid YAML ({bounded(str(error).splitlines()[0] if str(error) else type(error).__name__)})") from None
     except RecursionError:
         raise CaseError(f"{path}: not valid YAML (nested too deeply)") from None
+
+
+def with_engine(model: ModelT, engine: str | None, source: str = "case") -> ModelT:
+    """A case or study on another engine (`-e`), validated again (the engine may not run it);
+    None keeps its own. Raises CaseError naming the field the engine cannot take."""
+    if engine is None:
+        return model
+    try:
+        return type(model).model_validate({**model.model_dump(mode="json"), "engine": engine})
+    except ValidationError as error:
+        raise CaseError(f"{source} on {engine}: {format_error(error, type(model))}") from None

@@ -10,7 +10,7 @@ import pytest
 
 from orchestrator.case import Case
 from orchestrator.results import ATTRIBUTES, LAYOUT, Trajectory, layout, read_results
-from orchestrator.case import with_engine
+from orchestrator.validation import with_engine
 from orchestrator.runner import RESULTS, run_case
 from orchestrator.parity import slope_vectors, sliding_case
 

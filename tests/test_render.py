@@ -15,7 +15,7 @@ from orchestrator.case import CaseError, parse_case
 from orchestrator.engines.yade.materials import series, split_in_series
 from orchestrator.physics import pair_constants
 from orchestrator.engines.templating import data_literal, environment
-from orchestrator.case import with_engine
+from orchestrator.validation import with_engine
 from orchestrator.runner import render_case
 
 from orchestrator.parity import sliding_case

@@ -9,7 +9,8 @@ import click
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from orchestrator.case import CaseError, with_engine
+from orchestrator.case import CaseError
+from orchestrator.validation import with_engine
 from orchestrator.cli.common import REPO_ROOT, console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
 from orchestrator.results import read_results

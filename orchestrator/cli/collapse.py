@@ -11,7 +11,8 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from orchestrator.case import CaseError, with_engine
+from orchestrator.case import CaseError
+from orchestrator.validation import with_engine
 from orchestrator.cli.common import console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
 

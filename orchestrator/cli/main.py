@@ -16,7 +16,8 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from orchestrator.case import CaseError, load_case, with_engine
+from orchestrator.case import CaseError, load_case
+from orchestrator.validation import with_engine
 from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
@@ -55,6 +56,8 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
     except EngineError as error:
         fail(str(error), code=3)
     console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
+    for warning in record.get("warnings", []):
+        errors.print(f"[yellow]warning:[/] {warning}", markup=True, highlight=False, soft_wrap=True)
     console.print(f"results: {rundir / RESULTS}")
     return record
 

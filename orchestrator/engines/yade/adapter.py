@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
-from orchestrator.engines.yade.materials import GLUED, glued_clones, yade_materials
+from orchestrator.engines.yade.materials import GLUED, glued_clones, stand_in_scale, yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
@@ -60,6 +61,9 @@ class YadeAdapter(AdapterDefaults):
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
+        scale, warning = stand_in_scale(case)
+        self.warnings = [warning] if warning else []
+        pairs = [replace(p, cn=p.cn * scale) if p.law is ContactLaw.bilinear else p for p in prepared.pairs]
         as_boxes = [rectangle_box(wall) for wall in case.walls]
         boxes = [box for box in as_boxes if box is not None]
         facets = [
@@ -82,9 +86,9 @@ class YadeAdapter(AdapterDefaults):
                  c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia))
             )
         touching = case.touching_pairs()
-        friction = [(p.materials[0], p.materials[1], p.mu) for p in prepared.pairs if frozenset(p.materials) in touching]
-        materials = yade_materials(case, prepared.pairs)
-        clones = glued_clones(case, prepared.pairs, materials)
+        friction = [(p.materials[0], p.materials[1], p.mu) for p in pairs if frozenset(p.materials) in touching]
+        materials = yade_materials(case, pairs)
+        clones = glued_clones(case, pairs, materials)
         for clone in clones:  # a glued clone meets what its material meets, with the same friction
             name = str(clone["name"]).split("~")[0]
             glued = GLUED.format(name)

@@ -6,6 +6,12 @@ solve for per-material values that reproduce every touching pair: a body materia
 self-pair value, a wall material what is left for each body/wall pair. A combination the series
 rule cannot express is a case error, reported before YADE starts.
 
+The stand-in's dashpot is sized for one contact. A clump landing flat touches with face_contacts
+spheres at once, and N dashpots in parallel damp like one with √N times the damping ratio (a 4 × 2 × 1
+brick landing flat on 8: v_out/v_in 0.414 for 0.727). stand_in_scale divides every dashpot by √N
+when all bodies are clumps with the same N: a flat landing then has the law's restitution, a
+landing on fewer spheres (a corner) is under-damped (docs/parity.md gives the measured values).
+
 A glued (fixed) sphere gives its partner the whole contact: the dashpot must be sized for the
 partner's mass, not for the reduced mass of two moving bodies (which under-damps: e² 0.632 for
 0.53 on a sphere landing on a glued one). Glued spheres therefore get a clone of their material
@@ -16,7 +22,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.case import Case, CaseError
+from orchestrator.case import Case, CaseError, ContactLaw
 from orchestrator.physics import MIN_LINEAR_EN2, PairConstants, clipped_restitution, linear_damping, reference_masses
 
 RELATIVE_TOLERANCE = 1e-9
@@ -139,3 +145,16 @@ def glued_clones(case: Case, pairs: list[PairConstants], rows: list[dict[str, ob
                             "damping cannot all reproduce; run this case on LIGGGHTS")
         clones.append({**by_name[name], "name": GLUED.format(name), "cn": candidates[0] if candidates else by_name[name]["cn"]})
     return clones
+
+
+def stand_in_scale(case: Case) -> tuple[float, str | None]:
+    """(factor on every dashpot of the bilinear stand-in, warning or None): 1/√N when every body is a
+    clump whose flat landing touches with N spheres; 1 with a warning when clumps of different N, or
+    clumps and spheres, share the case (one factor cannot serve them all)."""
+    if case.law is not ContactLaw.bilinear or not case.bodies.clumps:
+        return 1.0, None
+    counts = {case.shape(c.shape).clump(case.material(c.material).density).face_contacts for c in case.bodies.clumps}
+    if len(counts) == 1 and not case.bodies.spheres:
+        return 1.0 / math.sqrt(counts.pop()), None
+    return 1.0, ("YADE's dashpot stand-in of the bilinear law is not calibrated for these clumps (several face-contact counts, "
+                 f"{sorted(counts)}, or spheres beside them): bodies landing on several spheres at once are over-damped")

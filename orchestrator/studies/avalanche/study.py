@@ -57,9 +57,20 @@ class BrickSpec(Strict):
     density: Real(gt=0.0, le=1e5) = 1700.0
     layout: tuple[int, int, int] = (4, 2, 1)
     bevel_deg: Real(ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see bricks.py)
+    # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
+    # join the layout, and the brick gets the rounded solid's mass and inertia (bricks.py). With them
+    # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
+    # (required with a bevel).
+    rounding: Real(ge=0.0, le=0.01) = 0.001
+
+    @model_validator(mode="after")
+    def _rounding_needs_a_box(self) -> "BrickSpec":
+        if self.rounding and self.bevel_deg:
+            raise ValueError(f"rounding: a bevelled brick has no corner spheres; allowed: 0 with bevel_deg > 0 (got {self.rounding!r})")
+        return self
 
     def build(self) -> BrickClump:
-        return BrickClump(self.length, self.width, self.thickness, self.density, self.layout, self.bevel_deg)
+        return BrickClump(self.length, self.width, self.thickness, self.density, self.layout, self.bevel_deg, rounding=self.rounding)
 
 
 class PairSpec(Strict):
@@ -181,7 +192,7 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
             ],
             "contacts": contacts,
             "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout),
-                        "bevel_deg": spec.bevel_deg}],
+                        "bevel_deg": spec.bevel_deg, "rounding": spec.rounding}],
             "bodies": {"clumps": clumps},
             "walls": walls,
             **extra,

@@ -1,0 +1,169 @@
+"""Single-brick drops on a plate: the impacts the 2012 study identified its contact law on, against
+the same drops run with the study's own code (reference.toml, [brick_drop.richefeu_code]).
+
+Two drops, each with two sets of constants (A: brick/support of Table 1; B: brick/brick of Table 1
+put on the brick/plate pair):
+- flat: the brick's centre released at rest at z = 0.050 m, its 31 × 15 face down. Measured: the
+  rebound ratios v_out / v_in of the first two impacts and the apex of the brick's lowest point
+  after the first;
+- tilted: released at rest at z = 0.100 m, turned by Ry(10°)·Rx(20°). Measured: the apex of the
+  centre in the main rebound and its time, the second landing, the horizontal travel at 0.27 s
+  (set A; the study's code is not step-robust after that), the time at rest, the travel and
+  whether the brick lies flat (set B).
+
+Events come from the pose alone: a body touches the plate while the lowest point of its spheres is
+below the plate (their overlap), so every representation of the brick is measured alike. Frames
+every 1e-4 s; a rebound's speeds are those of the free flights on either side of the contact,
+extrapolated to its ends (gravity only), so the frame interval does not bias the ratio.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from orchestrator.bricks import BrickClump, quaternion_matrices
+from orchestrator.case import Case, parse_case
+from orchestrator.results import RESULTS, Trajectory, read_results
+from orchestrator.runner import run_case
+from orchestrator.studies.avalanche.study import BrickSpec, load_reference
+
+G = 9.81
+FRAME = 1.0e-4  # s between frames
+TILTED = (0.981060262190, 0.172987393925, 0.085831651177, -0.015134435901)  # Ry(10°)·Rx(20°), (w, x, y, z)
+REST_SPEED = 5.0e-3  # m/s: at rest once the centre and every corner move slower than this, for good
+FLAT_TILT_DEG = 5.0
+MAIN_FLIGHT = 0.02  # s: the main rebound is the first flight at least this long (the impact's own bounces last < 5 ms)  # lying flat: the short axis within this of the vertical
+
+
+def reference() -> dict[str, Any]:
+    """[brick_drop.richefeu_code] of reference.toml: constants, the brick's volume and inertia, results."""
+    return load_reference()["brick_drop"]["richefeu_code"]
+
+
+def study_brick(layout: tuple[int, int, int] | None = None, rounding: float | None = None, name: str = "brick") -> dict[str, Any]:
+    """A shape entry for the study's brick (31 × 15 × 8 mm) as the brick studies build it by default
+    (BrickSpec: its layout and rounding unless given), with the mass and inertia of the study's
+    rounded brick (density 1700 kg/m³ × V, and I/m of the reference) whatever the clump."""
+    ref, default = reference(), BrickSpec()
+    mass = default.density * ref["volume"]
+    return {"name": name, "length": default.length, "width": default.width, "thickness": default.thickness,
+            "layout": list(layout or default.layout), "rounding": default.rounding if rounding is None else rounding,
+            "mass": mass, "inertia": [mass * k for k in ref["inertia_over_mass"]]}
+
+
+def drop_case(engine: str, shape: dict[str, Any], constants: str, tilted: bool, duration: float | None = None) -> Case:
+    """The drop of `shape` with constants "A" or "B" on a 0.4 × 0.4 m plate (top at z = 0)."""
+    law = {"law": "bilinear", **reference()[f"set_{constants}"]}
+    start = {"position": [0.0, 0.0, 0.100], "orientation": list(TILTED)} if tilted else {"position": [0.0, 0.0, 0.050]}
+    return parse_case({
+        "name": f"drop_{'tilted' if tilted else 'flat'}_{constants}", "engine": engine,
+        "time": {"duration": duration or (0.60 if tilted else 0.36), "output_interval": FRAME},
+        "materials": [{"name": "brick", "density": 1700.0}, {"name": "plate", "density": 1700.0}],
+        "contacts": [{"materials": ["brick", "brick"], **law}, {"materials": ["brick", "plate"], **law}],
+        "shapes": [shape],
+        "bodies": {"clumps": [{"shape": shape["name"], "material": "brick", **start}]},
+        "walls": [{"type": "rectangle", "name": "plate", "material": "plate", "origin": [-0.2, -0.2, 0.0],
+                   "edge1": [0.4, 0.0, 0.0], "edge2": [0.0, 0.4, 0.0]}],
+        "domain": {"lower": [-0.3, -0.3, -0.05], "upper": [0.3, 0.3, 0.3]},
+    })
+
+
+@dataclass(frozen=True)
+class Drop:
+    """The pose of one dropped brick over time. time (F,) s; centre (F, 3) m; velocity (F, 3) m/s;
+    spin (F, 3) rad/s; rotation (F, 3, 3); lowest (F,) m: lowest point of the body's spheres."""
+
+    time: np.ndarray
+    centre: np.ndarray
+    velocity: np.ndarray
+    spin: np.ndarray
+    rotation: np.ndarray
+    lowest: np.ndarray
+
+    @classmethod
+    def from_trajectory(cls, trajectory: Trajectory, clump: BrickClump) -> "Drop":
+        rotation = quaternion_matrices(trajectory.orientation[:, 0])
+        spheres = trajectory.position[:, 0, None, :] + np.einsum("fij,sj->fsi", rotation, clump.centres)
+        lowest = (spheres[:, :, 2] - clump.radii[None, :]).min(axis=1)
+        return cls(trajectory.time, trajectory.position[:, 0], trajectory.velocity[:, 0], trajectory.angular_velocity[:, 0], rotation, lowest)
+
+    def contacts(self) -> list[tuple[int, int]]:
+        """(first, last) frame of each contact episode with the plate (lowest point below its top)."""
+        touching = np.concatenate([[False], self.lowest < 0.0, [False]])
+        edges = np.flatnonzero(np.diff(touching.astype(int)))
+        return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2])]
+
+    def flight_speed(self, frame: int, at: float) -> float:
+        """Vertical speed of the centre at time `at` on the free flight through `frame` (gravity only)."""
+        return float(self.velocity[frame, 2] - G * (at - self.time[frame]))
+
+    def rebound_ratios(self, count: int = 2) -> list[float]:
+        """v_out / v_in of the first `count` impacts (vertical centre speeds at the contact's ends)."""
+        ratios = []
+        for first, last in self.contacts()[:count]:
+            if first == 0 or last + 1 >= len(self.time):
+                break
+            v_in = self.flight_speed(first - 1, self._crossing(first - 1))
+            v_out = self.flight_speed(last + 1, self._crossing(last))
+            ratios.append(-v_out / v_in)
+        return ratios
+
+    def _crossing(self, frame: int) -> float:
+        """Time the lowest point crosses the plate between `frame` and the next (linear)."""
+        a, b = self.lowest[frame], self.lowest[frame + 1]
+        return float(self.time[frame] + (self.time[frame + 1] - self.time[frame]) * a / (a - b))
+
+    def rest_frame(self) -> int | None:
+        """First frame from which the brick stays at rest (centre and every corner slower than REST_SPEED)."""
+        reach = np.linalg.norm(self.velocity, axis=1) + np.linalg.norm(self.spin, axis=1) * 0.5 * math.hypot(0.031, 0.015, 0.008)
+        moving = np.flatnonzero(reach >= REST_SPEED)
+        if not len(moving):
+            return 0
+        return int(moving[-1]) + 1 if moving[-1] + 1 < len(self.time) else None
+
+    def lying_flat(self, frame: int) -> bool:
+        return bool(abs(self.rotation[frame, 2, 2]) >= math.cos(math.radians(FLAT_TILT_DEG)))
+
+    def travel(self, frame: int) -> float:
+        return float(np.linalg.norm(self.centre[frame, :2] - self.centre[0, :2]))
+
+
+def flat_metrics(drop: Drop) -> dict[str, Any]:
+    ratios = drop.rebound_ratios(2)
+    episodes = drop.contacts()
+    apex = float(drop.lowest[episodes[0][1]:episodes[1][0]].max()) if len(episodes) > 1 else math.nan
+    return {"rebound_ratios": ratios, "apex_lowest_point": apex}
+
+
+def tilted_metrics(drop: Drop) -> dict[str, Any]:
+    """First contact; the main rebound (the first flight of MAIN_FLIGHT or longer): the centre's apex and time and
+    the landing that ends it; the horizontal travel at 0.27 s; rest time, travel and pose."""
+    episodes = drop.contacts()
+    metrics: dict[str, Any] = {"first_contact": float(drop.time[episodes[0][0]]) if episodes else math.nan}
+    flights = [(episodes[k][1] + 1, episodes[k + 1][0]) for k in range(len(episodes) - 1)]
+    main = [f for f in flights if drop.time[f[1]] - drop.time[f[0]] >= MAIN_FLIGHT]
+    if main:
+        start, end = main[0]
+        top = start + int(np.argmax(drop.centre[start:end, 2]))
+        metrics.update(centre_apex=float(drop.centre[top, 2]), apex_time=float(drop.time[top]), second_landing=float(drop.time[end]))
+    at = int(np.searchsorted(drop.time, 0.27))
+    metrics["travel_at_027"] = drop.travel(min(at, len(drop.time) - 1))
+    rest = drop.rest_frame()
+    metrics.update(rest_time=math.nan if rest is None else float(drop.time[rest]))
+    if rest is not None:
+        metrics.update(rest_travel=drop.travel(rest), lying_flat=drop.lying_flat(rest))
+    return metrics
+
+
+def run_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> dict[str, Any]:
+    """Run one drop in `directory` and return its metrics (flat_metrics or tilted_metrics)."""
+    case = drop_case(engine, shape, constants, tilted)
+    run_case(case, directory, directory / "run")
+    clump = case.shape(shape["name"]).clump(case.material("brick").density)
+    drop = Drop.from_trajectory(read_results(directory / "run" / RESULTS), clump)
+    return tilted_metrics(drop) if tilted else flat_metrics(drop)
