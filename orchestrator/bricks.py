@@ -223,7 +223,7 @@ def rounded_box_moments(sides: np.ndarray, rounding: float) -> tuple[float, np.n
             second[m] += 4.0 * inner[k] * (half[m] ** 2 * disc[0] + 2.0 * half[m] * disc[1] + disc[2])  # edges along k, at ± half[m]
     volume += 8.0 * ball[0]
     second += 8.0 * (half**2 * ball[0] + 2.0 * half * ball[1] + ball[2])
-    return volume, np.zeros(3), np.diag(second)
+    return float(volume), np.zeros(3), np.diag(second)
 
 
 def solid_moments(points: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

@@ -34,6 +34,17 @@ def test_deck_data_refuses_non_finite_numbers() -> None:
         data_literal({"dt": math.nan})
 
 
+def test_numpy_numbers_render_as_plain_numbers() -> None:
+    """numpy 2 writes repr(np.float64(0.5)) as 'np.float64(0.5)', which LIGGGHTS reads as 0 (a clump
+    mass computed with numpy made the template's volume zero)."""
+    import numpy as np
+
+    from orchestrator.engines.templating import deck_number
+
+    assert deck_number(np.float64(0.5)) == "0.5" and deck_number(np.int64(3)) == "3"
+    assert environment("liggghts").from_string("{{ m }}").render(m=np.float64(6.25e-3)) == "0.00625"
+
+
 @pytest.mark.parametrize("engine", ["liggghts", "yade"])
 def test_no_template_can_emit_raw_text(engine: str) -> None:
     template = environment(engine).from_string("x = {{ value }}")

@@ -72,9 +72,7 @@ ENGINES: dict[str, EngineEntry] = {
             Capabilities(clumps=True, mixed_bodies=True, meshes=True, mpi=False, restart=False, compiled_law=False,
                          implicit=False),
             "YADE 2023.02a (Debian), the bilinear law emulated by a dashpot",
-            (("clump flat on 4 spheres", "e² 0.304: the dashpot stand-in is sized for one contact, so N at once over-damp (∝ √N)"),
-             ("clump flat on 8 spheres", "e² 0.198: the dashpot stand-in is sized for one contact, so N at once over-damp (∝ √N)"),
-             ("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
+            (("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
              ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)")),
         ),
         EngineEntry(

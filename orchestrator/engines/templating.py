@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import jinja2
+import numpy as np
 
 PACKAGED_TEMPLATES = Path(__file__).resolve().parents[2] / "templates"
 
@@ -34,6 +35,8 @@ def template_root() -> Path:
 
 def deck_number(value: Any) -> str:
     """A number for a deck, with full precision."""
+    if isinstance(value, (np.integer, np.floating)):
+        value = value.item()  # numpy 2 writes repr(np.float64(0.5)) as 'np.float64(0.5)'
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError(f"expected a number, got {value!r}")
     if not math.isfinite(value):
@@ -65,7 +68,7 @@ def _plain(value: Any) -> Any:
 def _finalize(value: Any) -> str:
     if isinstance(value, DataLiteral):
         return value
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         return deck_number(value)
     text = str(value)
     if isinstance(value, str) and not _SAFE_DECK_WORD.match(text):
