@@ -75,3 +75,20 @@ def test_the_rounded_brick_has_the_study_volume_and_inertia() -> None:
     assert brick.n_spheres == 16 and brick.face_contacts == 4
     corners = brick.centres[-8:]
     assert abs(corners).max(axis=0) == pytest.approx([0.0145, 0.0065, 0.003])  # tangent to the three faces
+
+
+def test_yade_stand_in_is_calibrated_only_where_one_factor_serves_every_body() -> None:
+    """1/√N on every dashpot when all bodies are clumps with N spheres on their largest face; no
+    factor, and a warning, when clumps of several N (or spheres beside clumps) share the case."""
+    from orchestrator.engines.yade.materials import stand_in_scale
+    from orchestrator.studies.brick_drop import drop_case, study_brick
+
+    rounded = drop_case("yade", study_brick(), "A", False)
+    assert stand_in_scale(rounded) == (pytest.approx(0.5), None)
+    plain = drop_case("yade", study_brick(rounding=0.0), "A", False)
+    assert stand_in_scale(plain) == (pytest.approx(8 ** -0.5), None)
+    data = rounded.model_dump(mode="json")
+    data["shapes"].append({**data["shapes"][0], "name": "plain", "rounding": 0.0})
+    data["bodies"]["clumps"].append({**data["bodies"]["clumps"][0], "shape": "plain", "position": [0.1, 0.1, 0.05]})
+    scale, warning = stand_in_scale(type(rounded).model_validate(data))
+    assert scale == 1.0 and warning is not None and "[4, 8]" in warning
