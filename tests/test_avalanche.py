@@ -136,6 +136,12 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     # Stopped: what still moves (a brick settling on an edge, say) holds < 1e-4 of the energy released.
     assert report["kinetic_to_released_energy"] < 1e-4
     assert 0.0 < deposit["travel_angle_cm_deg"] < 45.0
+    # The front (the deposit's leading brick) never moves back by more than a brick length and ends
+    # within one of the deposit's distal end R.
+    front = np.array(report["front"]["position"], dtype=float)
+    brick_length = study.brick.length
+    assert np.nanmax(np.fmax.accumulate(front) - front) <= brick_length
+    assert abs(report["front"]["final_position"] - deposit["runout"]) <= brick_length
     # The release starts exactly where the packing ended (LIGGGHTS: its restart file; YADE: exact placement).
     packing_dir = Path(report["packing"]["directory"])
     packed = read_results(packing_dir / RESULTS)

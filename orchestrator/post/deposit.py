@@ -58,6 +58,16 @@ def main_cluster(points: np.ndarray, link_distance: float) -> np.ndarray:
     return labels == np.bincount(labels).argmax()
 
 
+def deposit_members(final: np.ndarray, radius: np.ndarray, link_distance: float | None = None) -> np.ndarray:
+    """(B,) bool: the bodies of the deposit, the largest cluster of final centres (B, 3) linked when
+    closer than link_distance (default 6 × the largest bounding radius); lost bodies (NaN) are out."""
+    present = np.isfinite(final).all(axis=1)
+    link = link_distance if link_distance is not None else 6.0 * float(radius.max())
+    keep = np.zeros(len(final), dtype=bool)
+    keep[np.flatnonzero(present)[main_cluster(final[present], link)]] = True
+    return keep
+
+
 def deposit_metrics(
     initial: np.ndarray,
     final: np.ndarray,
@@ -67,9 +77,7 @@ def deposit_metrics(
 ) -> DepositMetrics:
     """Metrics from initial and final body centres (B, 3) in the frame described in the module docstring."""
     present = np.isfinite(final).all(axis=1)
-    link = link_distance if link_distance is not None else 6.0 * float(radius.max())
-    keep = np.zeros(len(final), dtype=bool)
-    keep[np.flatnonzero(present)[main_cluster(final[present], link)]] = True
+    keep = deposit_members(final, radius, link_distance)
     x, y, z, r = final[:, 0], final[:, 1], final[:, 2], radius
 
     def extents(mask: np.ndarray) -> tuple[float, float, float, float]:

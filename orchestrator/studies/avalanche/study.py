@@ -319,10 +319,12 @@ def measure(trajectory: Trajectory, brick: BrickClump, first_frame: int = 0, gra
 
     gravity: m/s², the downward (−z) component of the case's gravity, for the released energy."""
     metrics = deposit.deposit_metrics(trajectory.position[first_frame], trajectory.position[-1], trajectory.mass, trajectory.radius)
-    # At least 1 % of the mass and at least three bricks must stand at the front.
-    share = max(0.01, 3.0 / trajectory.n_bodies)
+    # The front is the leading brick among those that end in the deposit: the rule of R (deposit.py),
+    # less the brick's bounding radius, so a group that runs ahead and leaves never holds it.
     time = trajectory.time[first_frame:] - trajectory.time[first_frame]
-    position, velocity = front.front_curve(time, trajectory.position[first_frame:, :, 0], trajectory.mass, window=2 * brick.length, min_fraction=share)
+    members = deposit.deposit_members(trajectory.position[-1], trajectory.radius)
+    position, velocity = front.front_curve(time, trajectory.position[first_frame:, :, 0], trajectory.mass, window=2 * brick.length,
+                                           min_fraction=0.0, members=members)
     on_flat = position >= 0.0
     return {
         "deposit": metrics.as_dict(),
