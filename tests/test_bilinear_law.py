@@ -94,7 +94,7 @@ def test_compiled_model_matches_the_reference_at_every_step(tmp_path: Path) -> N
     law = BilinearNormal(KN, EN2)
     expected = np.array([law.step(h) for h in overlap])
     assert np.any(np.diff(overlap) < 0) and force.max() > 0.9  # the cycle was loaded and unloaded
-    assert np.max(np.abs(force - expected)) <= 1e-9 * force.max()  # issue 3: ≤ 1e-9 relative
+    assert np.max(np.abs(force - expected)) <= 1e-9 * force.max()  # ≤ 1e-9 relative
 
 
 def _frames(path: Path) -> np.ndarray:

@@ -49,7 +49,7 @@ def test_block_slides_with_kinetic_acceleration_above_mu(engine: str, law: str, 
     angle = math.degrees(math.atan(MU + 0.05))
     run_case(sliding_case(engine, angle, MU, duration=0.3, law=law), tmp_path, tmp_path / "run")
     acceleration, expected = downslope_acceleration(read_results(tmp_path / "run" / RESULTS), angle, start=0.05)
-    assert acceleration == pytest.approx(expected, rel=0.02)  # issue 3: within 2 %
+    assert acceleration == pytest.approx(expected, rel=0.02)  # within 2 %
 
 
 def brick_on_incline_case(engine: str, angle_deg: float, mu: float, duration: float = 0.4) -> Case:
@@ -79,7 +79,7 @@ def brick_on_incline_case(engine: str, angle_deg: float, mu: float, duration: fl
 
 @pytest.mark.parametrize("engine", engine_params())
 def test_brick_clump_sticks_below_mu_and_slides_above(engine: str, tmp_path: Path) -> None:
-    """Issue 3 with a clumped brick: at rest for tan α = μ − 0.02, kinetic acceleration for tan α = μ + 0.05.
+    """A clumped brick: at rest for tan α = μ − 0.02, kinetic acceleration for tan α = μ + 0.05.
 
     Below μ the brick lands from 1.5 mm with some downslope speed (rebounds, rocking), which kinetic
     friction removes at g(sin α − μ cos α) ≈ −0.18 m/s²; once stopped it must stay stopped.
@@ -103,4 +103,4 @@ def test_brick_clump_sticks_below_mu_and_slides_above(engine: str, tmp_path: Pat
     slide_angle = math.degrees(math.atan(MU + 0.05))
     run_case(brick_on_incline_case(engine, slide_angle, MU), tmp_path, tmp_path / "slide")
     acceleration, expected = downslope_acceleration(read_results(tmp_path / "slide" / RESULTS), slide_angle, start=0.15)
-    assert acceleration == pytest.approx(expected, rel=0.02)  # issue 3: within 2 %
+    assert acceleration == pytest.approx(expected, rel=0.02)  # within 2 %

@@ -1,4 +1,4 @@
-"""Head-on impacts: e² = (v_out / v_in)² must equal en2 whatever the speed (issue 3 acceptance).
+"""Head-on impacts: e² = (v_out / v_in)² must equal en2 whatever the speed.
 
 No gravity, so the velocities before and after the impact are constant and read off the first
 and last frames exactly.
@@ -71,7 +71,7 @@ def measured_e2(case: Case, rundir: Path) -> float:
 def test_yade_restitution_is_speed_independent(target: str, en2: float, tmp_path: Path) -> None:
     """YADE emulates the bilinear law by the clipped dashpot sized for this restitution.
 
-    Tolerance ±3 % (issue 3); the remaining error is time discretisation at 50 steps per contact.
+    Tolerance ±3 %; the remaining error is time discretisation at 50 steps per contact.
     """
     for speed in SPEEDS:
         e2 = measured_e2(impact_case("yade", "bilinear", en2, speed, target), tmp_path / f"v{speed}")
@@ -83,7 +83,7 @@ def test_yade_restitution_is_speed_independent(target: str, en2: float, tmp_path
 @pytest.mark.parametrize("target", ["sphere", "wall"])
 @pytest.mark.parametrize("en2", [0.13, 0.53])
 def test_liggghts_bilinear_restitution_is_exact_at_every_speed(target: str, en2: float, tmp_path: Path) -> None:
-    """The compiled bilinear law: ±1 % (issue 3). Measured 0.1300-0.1301 and 0.5300-0.5301."""
+    """The compiled bilinear law: ±1 %. Measured 0.1300-0.1301 and 0.5300-0.5301."""
     for speed in SPEEDS:
         e2 = measured_e2(impact_case("liggghts", "bilinear", en2, speed, target), tmp_path / f"v{speed}")
         assert e2 == pytest.approx(en2, rel=0.01), f"speed {speed} m/s"
