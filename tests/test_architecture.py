@@ -1,7 +1,7 @@
 """The house plan, checked on the source (standard `ast`, no engine): layers, engine names, sizes.
 
 Layers, lowest first; a module may import from its own layer and the ones below, never above. The
-order is the one the README's tree describes.
+order is the one docs/development.md describes.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def layer_of(module: str) -> int:
     `orchestrator` stands for its __init__ only)."""
     matches = [(name.count("."), index) for index, names in enumerate(LAYERS) for name in names
                if module == name or (name != "orchestrator" and module.startswith(name + "."))]
-    assert matches, f"{module} is in no layer: add it to LAYERS (and to the README's tree)"
+    assert matches, f"{module} is in no layer: add it to LAYERS (and to the tree in docs/development.md)"
     return max(matches)[1]
 
 

@@ -61,7 +61,7 @@ def test_good_case_files_load() -> None:
     ids=" ".join,
 )
 def test_every_documented_command_exists(command: list[str]) -> None:
-    """The README's command table is the CLI: a command lost in a refactor fails here, not in a user's hands."""
+    """The command table of docs/commands.md is the CLI: a command lost in a refactor fails here, not in a user's hands."""
     result = CliRunner().invoke(main, [*command, "--help"])
     assert result.exit_code == 0, result.output
     assert "Usage:" in result.output

@@ -198,7 +198,7 @@ PRESETS = sorted((Path(__file__).parent.parent / "cases" / "collapse").glob("*.y
 
 @pytest.mark.parametrize("preset", PRESETS, ids=lambda path: path.stem)
 def test_collapse_presets_are_valid_studies(preset: Path) -> None:
-    """Every preset the README points to loads and builds its preparation (grains in the column)."""
+    """Every preset the docs point to loads and builds its preparation (grains in the column)."""
     study = load_collapse(preset)
     rained = sum(rain_counts(study))
     assert rained > 100

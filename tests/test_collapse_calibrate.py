@@ -1,5 +1,5 @@
 """The μ bisection of the horizontal-collapse calibration, on a stand-in runout law (no engine:
-this checks the search, the real runs are in the note and the README)."""
+this checks the search, the real runs are in docs/studies/collapse.md)."""
 
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ def impact_case(engine: str, law: str, en2: float, speed: float, target: str) ->
         walls = []
     else:
         spheres = [{"material": "ball", "radius": RADIUS, "position": [0.013, -0.007, RADIUS + GAP], "velocity": [0, 0, -speed]}]
-        # Off the rectangle's diagonal: YADE would see both triangles there (see README).
+        # Off the rectangle's diagonal: YADE would see both triangles there (see docs/engines.md).
         walls = [{"type": "rectangle", "name": "floor", "material": "plate", "origin": [-0.05, -0.05, 0], "edge1": [0.1, 0, 0], "edge2": [0, 0.1, 0]}]
     # Long enough to approach, collide (contact ≈ 0.3 ms) and separate at the slowest speed.
     duration = 4 * GAP / speed + 2e-3

@@ -62,3 +62,12 @@ def test_a_misspelt_field_is_rejected() -> None:
 def test_the_command_prints_one_schema() -> None:
     result = CliRunner().invoke(main, ["schema", "case"])
     assert result.exit_code == 0 and result.output == render("case")
+
+
+def test_ranges_are_checked_by_the_schema_too() -> None:
+    case = load(REPO / "cases" / "free_fall.yaml")
+    validator = Draft202012Validator(schema("case"))
+    case["contacts"][0]["en2"] = 1.5
+    assert not validator.is_valid(case)
+    case["contacts"][0]["en2"] = 0.0
+    assert not validator.is_valid(case)  # (0, 1]

@@ -21,7 +21,7 @@ def run_options() -> RunOptions:
     return options if isinstance(options, RunOptions) else RunOptions()
 
 
-# Exit codes (README, "Commands"): 2 invalid input, 3 engine failure, 4 plugin build failure,
+# Exit codes (docs/troubleshooting.md): 2 invalid input, 3 engine failure, 4 plugin build failure,
 # 5 damaged results, 1 anything unexpected (`demorch --debug …` shows its traceback).
 EXIT_INVALID, EXIT_ENGINE, EXIT_BUILD, EXIT_DAMAGED, EXIT_UNEXPECTED = 2, 3, 4, 5, 1
 # What reading a damaged result raises: truncated or random HDF5 (OSError), missing datasets or keys

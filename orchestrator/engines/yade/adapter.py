@@ -59,7 +59,7 @@ class YadeAdapter(AdapterDefaults):
         from orchestrator.engines.templating import render
 
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
-        # spring-dashpot with the same loading stiffness and restitution (README: law comparison).
+        # spring-dashpot with the same loading stiffness and restitution (docs/engines.md).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
         scale, warning = stand_in_scale(case)
         self.warnings = [warning] if warning else []

@@ -67,7 +67,7 @@ class GrainSpec(Strict):
 class BedSpec(Strict):
     erodible_thickness: Real(ge=0.0, le=1.0) = 0.0  # h_i, m, above the rough layer
     # The glued layer (3D): "rows" of touching grains (the calibrated default: every figure in the
-    # README), or "random", a dense random monolayer like glued beads, without the straight gutters
+    # docs/studies/collapse.md), or "random", a dense random monolayer like glued beads, without the straight gutters
     # between rows that grains roll down (see `rough_bed`).
     glued: Literal["rows", "random"] = "rows"
 
@@ -102,7 +102,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 2022
     # 3: a channel between side walls (the quasi-2D set-up of the scaling law and of the study's
     # reduced 3D runs). 2: grains in one plane, ≈ 5 × cheaper; its runout hardly depends on μ
-    # (free rolling) and overshoots the law (see the README).
+    # (free rolling) and overshoots the law (see docs/studies/collapse.md).
     dimension: Literal[2, 3] = 3
     column: ColumnSpec = ColumnSpec()
     channel: ChannelSpec = ChannelSpec()
@@ -112,7 +112,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     preparation: PreparationSpec = PreparationSpec()
     release: CollapseRelease = CollapseRelease()
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
-    # default runout by less than the grain size (see the README).
+    # default runout by less than the grain size (see docs/studies/collapse.md).
     time_safety_factor: Real(gt=0.0, le=0.5) = 0.05
     # The sections one engine reads (its solver, the step of an implicit engine) come from StudyEngineSections.
 
@@ -162,7 +162,7 @@ def rough_bed(study: CollapseStudy, rng: np.random.Generator) -> tuple[np.ndarra
 
     "rows": touching rows along x, staggered by d/4 (one row in 2D). "random" (3D): a random dense
     monolayer (`random_monolayer`). Rows leave straight gutters between them: at 22° grains roll
-    down them one by one (README, "Column collapses").
+    down them one by one (docs/studies/collapse.md).
     """
     d = study.grains.diameter
     start, end = -study.column.length, study.channel.length

@@ -1,0 +1,1 @@
+"""LIGGGHTS: adapter, deck, dump reader and the compiled contact-law plugin."""

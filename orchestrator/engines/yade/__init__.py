@@ -1,0 +1,1 @@
+"""YADE: adapter and per-material constants."""

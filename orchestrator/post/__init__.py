@@ -1,0 +1,1 @@
+"""Post-processing of results: summary, deposit, mass front, collapse profiles."""

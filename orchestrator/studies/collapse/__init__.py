@@ -1,0 +1,1 @@
+"""Column collapses on rigid and erodible beds (Martin et al. 2022)."""
