@@ -58,3 +58,37 @@ def test_outliers_do_not_set_the_extents() -> None:
     assert m.runout == pytest.approx(1.0 + R) and m.runout_raw == pytest.approx(2.5 + R)
     assert m.width == pytest.approx(0.2 + 2 * R) and m.width_raw == pytest.approx(1.6 + 2 * R)
     assert m.x_cm == pytest.approx(0.75)
+
+
+def test_the_thickness_map_holds_the_highest_top_above_the_ground() -> None:
+    """Two spheres stacked on the board and one on the 45° slope: the board cell holds the top of the
+    upper sphere, the slope cell the sphere's top above the slope surface, other cells nothing."""
+    from orchestrator.post.deposit import thickness_map
+
+    points = np.array([[0.105, 0.005, 0.004], [0.105, 0.005, 0.012], [-0.045, 0.005, 0.05]])
+    radii = np.array([0.004, 0.004, 0.004])
+    x_edges, y_edges, grid = thickness_map(points, radii, 45.0, 0.01)
+    i = np.searchsorted(x_edges, 0.105) - 1
+    k = np.searchsorted(x_edges, -0.045) - 1
+    assert grid[i, 0] == pytest.approx(0.016)
+    assert grid[k, 0] == pytest.approx(0.054 - 0.045)
+    assert np.isfinite(grid).sum() == 2
+
+
+def test_the_deposit_picture_draws_a_thickness_map(tmp_path) -> None:
+    """A constructed deposit of 40 bricks on the board and one far ahead: the picture is written."""
+    from orchestrator.bricks import brick_clump
+    from orchestrator.results import Trajectory
+    from orchestrator.studies.avalanche.report import plot_deposit
+
+    rng = np.random.default_rng(3)
+    n = 41
+    final = np.column_stack([rng.uniform(0.0, 0.2, n), rng.uniform(-0.1, 0.1, n), np.full(n, 0.004)])
+    final[-1] = [0.9, 0.0, 0.004]
+    initial = final - [0.5, 0.0, -0.5]
+    zeros = np.zeros((2, n, 3))
+    orientation = np.tile([1.0, 0.0, 0.0, 0.0], (2, n, 1))
+    trajectory = Trajectory(np.array([0.0, 1.0]), np.arange(n), np.array(["brick"] * n), np.full(n, 6.2e-3), np.full(n, 0.0162),
+                            np.ones((n, 3)), np.stack([initial, final]), zeros, zeros, orientation)
+    plot_deposit(trajectory, brick_clump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1), rounding=0.001), tmp_path / "deposit.png")
+    assert (tmp_path / "deposit.png").stat().st_size > 10_000

@@ -22,12 +22,13 @@ DEMO_STUDY = REPO_ROOT / "cases" / "avalanche" / "small.yaml"
 def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -> Path:
     """Plots, snapshots, VTK and index.html for a study directory; returns the page."""
     from orchestrator.studies.avalanche import report as pictures
-    from orchestrator.studies.avalanche.study import load_reference
+    from orchestrator.studies.avalanche.study import BrickSpec, load_reference
 
     trajectory = read_results(outdir / "run" / RESULTS)
     figures = outdir / "report"
     figures.mkdir(exist_ok=True)
-    pictures.plot_deposit(trajectory, figures / "deposit.png", slope_deg)
+    brick = BrickSpec.model_validate(report["study"]["brick"]).build()
+    pictures.plot_deposit(trajectory, brick, figures / "deposit.png", slope_deg)
     pictures.plot_front(report, figures / "front.png")
     snapshots = pictures.plot_snapshots(trajectory, figures, slope_deg=slope_deg)
     pictures.export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))

@@ -107,3 +107,22 @@ def deposit_metrics(
         bodies_in_deposit=int(keep.sum()),
         outliers=int(present.sum() - keep.sum()),
     )
+
+
+def thickness_map(points: np.ndarray, radii: np.ndarray, slope_deg: float, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gridded deposit thickness, as fringe projection measures it: (x edges (nx + 1,), y edges
+    (ny + 1,), thickness (nx, ny), m, NaN where no body), the highest sphere top in each cell of size
+    `cell` above the ground: the board (z = 0) for x ≥ 0, the slope (z = −x tan α) for x < 0.
+
+    points (S, 3): sphere centres in the frame of this module; radii (S,).
+    """
+    x, y = points[:, 0], points[:, 1]
+    height = points[:, 2] + radii - np.where(x < 0.0, -x * math.tan(math.radians(slope_deg)), 0.0)
+    x_edges = np.arange(math.floor(x.min() / cell) * cell, x.max() + cell, cell)
+    y_edges = np.arange(math.floor(y.min() / cell) * cell, y.max() + cell, cell)
+    i = np.clip(np.searchsorted(x_edges, x, side="right") - 1, 0, len(x_edges) - 2)
+    j = np.clip(np.searchsorted(y_edges, y, side="right") - 1, 0, len(y_edges) - 2)
+    grid = np.full((len(x_edges) - 1, len(y_edges) - 1), np.nan)
+    np.fmax.at(grid, (i, j), height)
+    return x_edges, y_edges, grid
+

@@ -14,7 +14,9 @@ from typing import Any
 import meshio
 import numpy as np
 
+from orchestrator.bricks import BrickClump, quaternion_matrices
 from orchestrator.figures import subplots
+from orchestrator.post import deposit
 from orchestrator.post.front import flat_phases
 from orchestrator.results import Trajectory
 
@@ -65,23 +67,48 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
     return rows
 
 
-def plot_deposit(trajectory: Trajectory, path: Path, slope_deg: float = 45.0) -> None:
-    """Plan view (x, y) and longitudinal section (x, z) of the final state, coloured by height."""
+FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
+
+
+def plot_deposit(trajectory: Trajectory, brick: BrickClump, path: Path, slope_deg: float = 45.0) -> None:
+    """Thickness map of the deposit (gridded at half a brick width, contours every 5 mm) with its
+    length L, runout R, width W and centre of mass marked, bodies outside it as crosses; below it,
+    the longitudinal section. One frame for every position: FRAME."""
     final = trajectory.position[-1]
-    ok = np.isfinite(final).all(axis=1)
-    fig, (plan, section) = subplots(2, 1, figsize=(8, 8), constrained_layout=True)
-    scatter = plan.scatter(final[ok, 0], final[ok, 1], c=final[ok, 2], s=6, cmap="viridis")
+    members = deposit.deposit_members(final, trajectory.radius)
+    metrics = deposit.deposit_metrics(trajectory.position[0], final, trajectory.mass, trajectory.radius)
+    rotations = quaternion_matrices(np.nan_to_num(trajectory.orientation[-1, members], nan=1.0))
+    spheres = final[members][:, None, :] + np.einsum("bij,sj->bsi", rotations, brick.centres)
+    radii = np.broadcast_to(brick.radii, spheres.shape[:2])
+    x_edges, y_edges, thickness = deposit.thickness_map(spheres.reshape(-1, 3), radii.reshape(-1), slope_deg, brick.width / 2)
+    fig, (plan, section) = subplots(2, 1, figsize=(8, 9), constrained_layout=True, gridspec_kw={"height_ratios": [2, 1]})
+    mesh = plan.pcolormesh(x_edges, y_edges, thickness.T * 1e3, cmap="YlOrBr", shading="flat")
+    centres_x, centres_y = (x_edges[:-1] + x_edges[1:]) / 2, (y_edges[:-1] + y_edges[1:]) / 2
+    levels = np.arange(5.0, max(10.0, np.nanmax(thickness) * 1e3), 5.0)
+    plan.contour(centres_x, centres_y, np.nan_to_num(thickness.T * 1e3), levels=levels, colors="k", linewidths=0.5)
+    fig.colorbar(mesh, ax=plan, label="thickness (mm)")
+    proximal = metrics.runout - metrics.length
     plan.axvline(0.0, color="k", lw=0.8, ls="--", label="slope toe")
+    plan.axvline(metrics.runout, color="tab:red", lw=1, label=f"R = {metrics.runout:.3f} m")
+    plan.axvspan(proximal, metrics.runout, ymin=0, ymax=0.03, color="tab:blue", label=f"L = {metrics.length:.3f} m")
+    ys = final[members, 1]
+    plan.axhline(ys.min() - brick.bounding_radius, color="tab:green", lw=0.8)
+    plan.axhline(ys.max() + brick.bounding_radius, color="tab:green", lw=0.8, label=f"W = {metrics.width:.3f} m")
+    plan.plot([metrics.x_cm], [float(np.average(ys, weights=trajectory.mass[members]))], "k*", ms=10, label=f"centre of mass, x = {metrics.x_cm:.3f} m")
+    strays = ~members & np.isfinite(final).all(axis=1)
+    if strays.any():
+        plan.plot(final[strays, 0], final[strays, 1], "x", color="grey", label=f"outside the deposit ({int(strays.sum())})")
+    plan.set_aspect("equal", adjustable="datalim")
     plan.set_ylabel("y (m)")
-    plan.set_aspect("equal", adjustable="datalim")  # x is not shared with the section: a shared x clipped wide deposits in y
-    plan.set_title("Deposit, plan view (colour: height)")
-    fig.colorbar(scatter, ax=plan, label="z (m)")
+    plan.legend(loc="upper left", fontsize=7)
+    plan.set_title(f"Deposit thickness; frame: {FRAME}", fontsize=9)
+    ok = np.isfinite(final).all(axis=1)
     section.scatter(final[ok, 0], final[ok, 2], s=4, color="tab:brown")
     left, right = min(final[ok, 0].min(), 0.0) - 0.05, final[ok, 0].max() + 0.05
     section.plot([left, 0.0, right], [-left * math.tan(math.radians(slope_deg)), 0.0, 0.0], color="k", lw=0.8)
-    section.set_xlabel("x from the slope toe (m)")
+    section.set_xlabel("x (m)")
     section.set_ylabel("z (m)")
-    section.set_title("Longitudinal section")
+    section.set_title("Longitudinal section (body centres)")
     fig.savefig(path, dpi=120)
 
 
@@ -162,7 +189,7 @@ def write_html(outdir: Path, title: str, rows: list[tuple[str, float, str, str]]
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>body{{font-family:sans-serif;margin:2em;max-width:1100px}}table{{border-collapse:collapse}}
 td,th{{border:1px solid #ccc;padding:4px 10px}}img{{max-width:100%}}figure{{margin:1em 0}}</style></head>
-<body><h1>{html.escape(title)}</h1><table><tr><th>metric</th><th>value</th><th>reference</th><th>check</th></tr>
+<body><h1>{html.escape(title)}</h1><p>Positions: {html.escape(FRAME)}.</p><table><tr><th>metric</th><th>value</th><th>reference</th><th>check</th></tr>
 {table}</table>{figures}</body></html>"""
     path = outdir / "index.html"
     path.write_text(page)
