@@ -101,12 +101,16 @@ def render(engine: str, template: str, context: dict[str, Any]) -> str:
 
 
 def template_hash(engine: str) -> str:
-    """sha256 over every template file of an engine: recorded in run.json to tie results to decks."""
+    """sha256 over what turns a case into an engine's deck, recorded in run.json to tie results to
+    decks: the engine's templates, its adapter package (the deck writer, YADE's stand-in constants)
+    and the engine-neutral numbers they use (physics.py, engines/common.py). cocd has no template:
+    its deck is data, and its package holds the solver that turns it into steps."""
+    package = Path(__file__).resolve().parent
+    files = [*sorted((package / engine).rglob("*.py")), package / "common.py", package.parent / "physics.py"]
+    if engine != "cocd":
+        files += sorted(path for path in (template_root() / engine).rglob("*") if path.is_file())
     digest = hashlib.sha256()
-    # cocd has no template: its deck is data, and what turns it into steps is the package's solver
-    folder = Path(__file__).resolve().parent / "cocd" if engine == "cocd" else template_root() / engine
-    for path in sorted(folder.rglob("*.py") if engine == "cocd" else folder.rglob("*")):
-        if path.is_file():
-            digest.update(path.relative_to(folder.parent).as_posix().encode())
-            digest.update(path.read_bytes())
+    for path in files:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
     return digest.hexdigest()
