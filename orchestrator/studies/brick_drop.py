@@ -76,7 +76,8 @@ def drop_case(engine: str, shape: dict[str, Any], constants: str, tilted: bool, 
 @dataclass(frozen=True)
 class Drop:
     """The pose of one dropped brick over time. time (F,) s; centre (F, 3) m; velocity (F, 3) m/s;
-    spin (F, 3) rad/s; rotation (F, 3, 3); lowest (F,) m: lowest point of the body's spheres."""
+    spin (F, 3) rad/s; rotation (F, 3, 3); lowest (F,) m: lowest point of the body's spheres;
+    reach m: the body's bounding radius (how fast its farthest point moves for a given spin)."""
 
     time: np.ndarray
     centre: np.ndarray
@@ -84,13 +85,15 @@ class Drop:
     spin: np.ndarray
     rotation: np.ndarray
     lowest: np.ndarray
+    reach: float
 
     @classmethod
     def from_trajectory(cls, trajectory: Trajectory, clump: BrickClump) -> "Drop":
         rotation = quaternion_matrices(trajectory.orientation[:, 0])
         spheres = trajectory.position[:, 0, None, :] + np.einsum("fij,sj->fsi", rotation, clump.centres)
         lowest = (spheres[:, :, 2] - clump.radii[None, :]).min(axis=1)
-        return cls(trajectory.time, trajectory.position[:, 0], trajectory.velocity[:, 0], trajectory.angular_velocity[:, 0], rotation, lowest)
+        return cls(trajectory.time, trajectory.position[:, 0], trajectory.velocity[:, 0], trajectory.angular_velocity[:, 0], rotation, lowest,
+                   clump.bounding_radius)
 
     def contacts(self) -> list[tuple[int, int]]:
         """(first, last) frame of each contact episode with the plate (lowest point below its top)."""
@@ -120,8 +123,8 @@ class Drop:
 
     def rest_frame(self) -> int | None:
         """First frame from which the brick stays at rest (centre and every corner slower than REST_SPEED)."""
-        reach = np.linalg.norm(self.velocity, axis=1) + np.linalg.norm(self.spin, axis=1) * 0.5 * math.hypot(0.031, 0.015, 0.008)
-        moving = np.flatnonzero(reach >= REST_SPEED)
+        fastest = np.linalg.norm(self.velocity, axis=1) + np.linalg.norm(self.spin, axis=1) * self.reach
+        moving = np.flatnonzero(fastest >= REST_SPEED)
         if not len(moving):
             return 0
         return int(moving[-1]) + 1 if moving[-1] + 1 < len(self.time) else None
@@ -141,8 +144,8 @@ def flat_metrics(drop: Drop) -> dict[str, Any]:
 
 
 def tilted_metrics(drop: Drop) -> dict[str, Any]:
-    """First contact; the main rebound (the first flight of MAIN_FLIGHT or longer): the centre's apex and time and
-    the landing that ends it; the horizontal travel at 0.27 s; rest time, travel and pose."""
+    """First contact; the main rebound (the first flight of MAIN_FLIGHT or longer): the centre's apex
+    and its time, and the landing that ends it; the horizontal travel at 0.27 s; rest time, travel, pose."""
     episodes = drop.contacts()
     metrics: dict[str, Any] = {"first_contact": float(drop.time[episodes[0][0]]) if episodes else math.nan}
     flights = [(episodes[k][1] + 1, episodes[k + 1][0]) for k in range(len(episodes) - 1)]
