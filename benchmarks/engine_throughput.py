@@ -34,7 +34,7 @@ sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
 from orchestrator.studies.avalanche.study import AvalancheStudy, load_study, packing_case
-from orchestrator.case import with_engine  # noqa: E402
+from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.runner import run_case  # noqa: E402
 
 FULL_SCALE = REPO / "cases" / "avalanche" / "random_pour_full.yaml"

@@ -39,11 +39,11 @@ sys.path.insert(0, str(REPO))
 from orchestrator import physics  # noqa: E402
 from orchestrator.case import RestStop  # noqa: E402
 from orchestrator.studies.avalanche.study import AvalancheStudy, ContactSpec, packing_case, load_study, packing_state_file, release_case
-from orchestrator.case import with_engine  # noqa: E402
+from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.studies.collapse.spec import load_collapse
 from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
 from orchestrator.studies.collapse.spec import release_case as collapse_release_case  # noqa: E402
-from orchestrator.case import with_engine as collapse_with_engine  # noqa: E402
+from orchestrator.validation import with_engine as collapse_with_engine  # noqa: E402
 from orchestrator.engines.liggghts import adapter as liggghts  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402

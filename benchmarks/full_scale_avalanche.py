@@ -31,7 +31,7 @@ sys.path.insert(0, str(REPO))
 from orchestrator import physics  # noqa: E402
 from orchestrator.case import Case  # noqa: E402
 from orchestrator.studies.avalanche.study import load_study, run_study
-from orchestrator.case import with_engine  # noqa: E402
+from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 
