@@ -283,3 +283,9 @@ def quaternion_matrices(quaternions: np.ndarray) -> np.ndarray:
 def world_sphere_centres(clump: BrickClump, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     """(n, 3) sphere centres of one brick placed at `position` with quaternion `orientation` (w, x, y, z)."""
     return np.asarray(position, dtype=float) + clump.centres @ quaternion_matrix(orientation).T
+
+
+def bodies_sphere_centres(clump: BrickClump, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    """(B, n, 3) sphere centres of B bricks (or one brick at B frames) at `positions` (B, 3) turned
+    by `rotations` (B, 3, 3)."""
+    return np.asarray(positions, dtype=float)[:, None, :] + np.einsum("bij,sj->bsi", rotations, clump.centres)

@@ -13,7 +13,6 @@ do instead:
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ from scipy.spatial import cKDTree
 from orchestrator import geometry, physics
 from orchestrator.case import Case, CaseError
 from orchestrator.engines.registry import capabilities
-from orchestrator.results import CASE_COPY, RUN_RECORD
+from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
 MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
@@ -35,11 +34,11 @@ OVERLAP_TOLERANCE = 0.05
 
 def check(case: Case, case_dir: Path) -> None:
     """Raise CaseError for the first problem found; return when the case is fit to run."""
-    plan = physics.schedule(case)
+    plan, table = physics.schedule(case), physics.bodies(case)
     check_step(case, plan.dt)
-    check_output(case, plan)
-    check_speeds(case, plan.dt)
-    check_geometry(case, case_dir)
+    check_output(case, plan, len(table))
+    check_speeds(case, plan.dt, table)
+    check_geometry(case, case_dir, table)
     check_initial_state(case, case_dir)
 
 
@@ -52,19 +51,18 @@ def check_step(case: Case, dt: float) -> None:
                         f"so contacts would be missed; allowed range: (0, {MAX_STEP_FRACTION * duration:.3g}] (or step: auto)")
 
 
-def check_output(case: Case, plan: physics.Schedule) -> None:
+def check_output(case: Case, plan: physics.Schedule, bodies: int) -> None:
     frames = plan.frames + 1
-    size = frames * len(physics.bodies(case)) * 13 * 8
+    size = frames * bodies * 13 * 8
     if frames > MAX_FRAMES or size > MAX_RESULTS_BYTES:
-        smallest = case.time.duration / min(MAX_FRAMES - 1, MAX_RESULTS_BYTES / (len(physics.bodies(case)) * 13 * 8) - 1)
+        smallest = case.time.duration / min(MAX_FRAMES - 1, MAX_RESULTS_BYTES / (bodies * 13 * 8) - 1)
         raise CaseError(f"time.output_interval: {case.time.output_interval!r} s gives {frames} frames ({size / 2**30:.3g} GB of results); "
                         f"allowed: at most {MAX_FRAMES} frames and {MAX_RESULTS_BYTES // 2**30} GB, an interval of at least {smallest:.3g} s")
 
 
-def check_speeds(case: Case, dt: float) -> None:
+def check_speeds(case: Case, dt: float, table: list[physics.BodyInfo]) -> None:
     if capabilities(case.engine).implicit:  # contact dynamics finds contacts over the whole step
         return
-    table = physics.bodies(case)
     smallest = min(b.radius for b in table)
     for index, body in enumerate(table):
         speed = float(np.linalg.norm(body.velocity))
@@ -74,7 +72,7 @@ def check_speeds(case: Case, dt: float) -> None:
                             f"{MAX_TRAVEL_PER_STEP * smallest / dt:.3g} m/s at this step")
 
 
-def check_geometry(case: Case, case_dir: Path) -> None:
+def check_geometry(case: Case, case_dir: Path, table: list[physics.BodyInfo]) -> None:
     spheres = case.bodies.spheres
     if spheres:
         centres = np.array([s.position for s in spheres])
@@ -89,7 +87,7 @@ def check_geometry(case: Case, case_dir: Path) -> None:
                                 "move it off the wall (a sphere may touch a wall, not cross it)")
     if case.domain is not None:
         lower, upper = np.asarray(case.domain.lower), np.asarray(case.domain.upper)
-        for index, body in enumerate(physics.bodies(case)):
+        for index, body in enumerate(table):
             if np.any(np.asarray(body.position) < lower) or np.any(np.asarray(body.position) > upper):
                 raise CaseError(f"{_body_field(case, index)}.position: {list(body.position)} is outside domain "
                                 f"[{list(case.domain.lower)}, {list(case.domain.upper)}]; enlarge `domain:` or move the body")
@@ -104,18 +102,10 @@ def check_initial_state(case: Case, case_dir: Path) -> None:
     name = capabilities(case.engine).state_file
     if not source.is_file():
         raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
-    record, saved = _read_json(source.parent / RUN_RECORD), _read_json(source.parent / CASE_COPY)
+    record, saved = read_json(source.parent / RUN_RECORD) or {}, read_json(source.parent / CASE_COPY) or {}
     if source.name != name or record.get("status") != "completed" or not saved.get("save_state"):
         raise CaseError(f"initial_state: {source} is not a state this package wrote: give the {name} of a completed run "
                         "made with `save_state: true`")
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
 
 
 def _check_overlaps(centres: np.ndarray, radii: np.ndarray, glued: np.ndarray) -> None:

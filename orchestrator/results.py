@@ -20,6 +20,7 @@ LAYOUT below is this table as data; a test reads a produced file against it.
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,6 +33,16 @@ FORMAT_VERSION = 1
 RESULTS = "results.h5"
 RUN_RECORD = "run.json"  # the record: run_id, build, status, timings, metrics
 CASE_COPY = "case.json"  # the validated inputs, canonical JSON
+
+
+def read_json(path: Path) -> dict | None:
+    """The JSON object in `path` (run.json, case.json, …), or None when it is missing, unreadable or
+    not an object."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
 
 # dataset → (dtype kind, rank): f float, i integer, S bytes
 LAYOUT: dict[str, tuple[str, int]] = {

@@ -35,7 +35,7 @@ from pydantic import BaseModel
 
 from orchestrator.case import Case
 from orchestrator.engines import get_adapter
-from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD
+from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
 
 LOCK = ".lock"
 ATTIC = "attic"
@@ -47,15 +47,6 @@ def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
     temporary = path.with_name(path.name + ".tmp")
     temporary.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
     os.replace(temporary, path)
-
-
-def read_json(path: Path) -> dict[str, Any] | None:
-    """The JSON object in `path`, or None when it is missing, unreadable or not an object."""
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 def now() -> str:

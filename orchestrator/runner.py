@@ -62,7 +62,6 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     directory.mkdir(parents=True, exist_ok=True)
     rundir.save_inputs(directory, case)
     deck = adapter.write_input(case, case_dir, directory)
-    warnings = list(getattr(adapter, "warnings", []))  # what the engine cannot do exactly for this case
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
         "kind": "case",
@@ -73,7 +72,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         "deck": deck.name,
         "status": "running",
         "started": rundir.now(),
-        **({"warnings": warnings} if warnings else {}),
+        **({"warnings": list(adapter.warnings)} if adapter.warnings else {}),
     }
     record_path = directory / RUN_RECORD
     rundir.write_json_atomic(record_path, record)

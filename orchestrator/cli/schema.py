@@ -118,14 +118,15 @@ def render(kind: str) -> str:
 @click.command("schema")
 @click.argument("kind", type=click.Choice(["all", *models()]), default="all")
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Write KIND.schema.json files here (default: print).")
-@click.option("--reference", type=click.Path(file_okay=False, path_type=Path), help="Also write the Markdown field reference, KIND.md, here.")
-def schema_command(kind: str, output: Path | None, reference: Path | None) -> None:
+@click.option("--reference", "reference_dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Also write the Markdown field reference, KIND.md, here.")
+def schema_command(kind: str, output: Path | None, reference_dir: Path | None) -> None:
     """JSON Schema of a case, study, campaign or calibration file (all of them with -o DIR)."""
     kinds = list(models()) if kind == "all" else [kind]
-    if reference is not None:
-        reference.mkdir(parents=True, exist_ok=True)
+    if reference_dir is not None:
+        reference_dir.mkdir(parents=True, exist_ok=True)
         for name in kinds:
-            (reference / f"{name}.md").write_text(globals()["reference"](name))
+            (reference_dir / f"{name}.md").write_text(reference(name))
     if output is None:
         if len(kinds) > 1:
             console.print_json(json.dumps({k: schema(k) for k in kinds}))

@@ -61,6 +61,8 @@ class EngineInfo:
 
 class EngineAdapter(Protocol):
     name: str
+    # What the engine cannot do exactly for the case of the last write_input (recorded in run.json).
+    warnings: list[str]
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "EngineAdapter":
@@ -84,9 +86,10 @@ class EngineAdapter(Protocol):
 
 
 class AdapterDefaults:
-    """What most adapters share: no run options, the templates as build inputs."""
+    """What most adapters share: no run options, the templates as build inputs, no warnings."""
 
     name: str
+    warnings: list[str] = []  # an adapter that has some sets its own list in write_input
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "AdapterDefaults":

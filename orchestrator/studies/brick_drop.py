@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.bricks import BrickClump, quaternion_matrices
+from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
@@ -90,7 +90,7 @@ class Drop:
     @classmethod
     def from_trajectory(cls, trajectory: Trajectory, clump: BrickClump) -> "Drop":
         rotation = quaternion_matrices(trajectory.orientation[:, 0])
-        spheres = trajectory.position[:, 0, None, :] + np.einsum("fij,sj->fsi", rotation, clump.centres)
+        spheres = bodies_sphere_centres(clump, trajectory.position[:, 0], rotation)
         lowest = (spheres[:, :, 2] - clump.radii[None, :]).min(axis=1)
         return cls(trajectory.time, trajectory.position[:, 0], trajectory.velocity[:, 0], trajectory.angular_velocity[:, 0], rotation, lowest,
                    clump.bounding_radius)

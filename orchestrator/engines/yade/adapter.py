@@ -20,7 +20,7 @@ from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
-from orchestrator.engines.yade.materials import GLUED, glued_clones, stand_in_scale, yade_materials
+from orchestrator.engines.yade.materials import GLUED, glued_clones, glued_friction, stand_in_scale, yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
@@ -89,11 +89,7 @@ class YadeAdapter(AdapterDefaults):
         friction = [(p.materials[0], p.materials[1], p.mu) for p in pairs if frozenset(p.materials) in touching]
         materials = yade_materials(case, pairs)
         clones = glued_clones(case, pairs, materials)
-        for clone in clones:  # a glued clone meets what its material meets, with the same friction
-            name = str(clone["name"]).split("~")[0]
-            glued = GLUED.format(name)
-            friction += [pair for a, b, mu in friction if name in (a, b)
-                         for pair in {(glued if a == name else a, b, mu), (a, glued if b == name else b, mu)} if pair != (a, b, mu)]
+        friction += glued_friction(friction, [str(c["name"]) for c in clones])
         data = {
             "seed": case.seed,
             "dt": prepared.schedule.dt,

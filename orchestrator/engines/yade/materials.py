@@ -147,13 +147,28 @@ def glued_clones(case: Case, pairs: list[PairConstants], rows: list[dict[str, ob
     return clones
 
 
+def glued_friction(friction: list[tuple[str, str, float]], clones: list[str]) -> list[tuple[str, str, float]]:
+    """The (material, material, μ) pairs a glued clone adds: it meets what its material meets, with
+    the same friction, except another glued sphere (glued spheres never interact)."""
+    added = []
+    for clone in clones:
+        name = clone.split("~")[0]
+        for a, b, mu in friction:
+            if a == name:
+                added.append((clone, b, mu))
+            if b == name:
+                added.append((a, clone, mu))
+    return added
+
+
 def stand_in_scale(case: Case) -> tuple[float, str | None]:
     """(factor on every dashpot of the bilinear stand-in, warning or None): 1/√N when every body is a
     clump whose flat landing touches with N spheres; 1 with a warning when clumps of different N, or
     clumps and spheres, share the case (one factor cannot serve them all)."""
     if case.law is not ContactLaw.bilinear or not case.bodies.clumps:
         return 1.0, None
-    counts = {case.shape(c.shape).clump(case.material(c.material).density).face_contacts for c in case.bodies.clumps}
+    kinds = {(c.shape, c.material) for c in case.bodies.clumps}
+    counts = {case.shape(shape).clump(case.material(material).density).face_contacts for shape, material in kinds}
     if len(counts) == 1 and not case.bodies.spheres:
         return 1.0 / math.sqrt(counts.pop()), None
     return 1.0, ("YADE's dashpot stand-in of the bilinear law is not calibrated for these clumps (several face-contact counts, "

@@ -14,7 +14,7 @@ from typing import Any
 import meshio
 import numpy as np
 
-from orchestrator.bricks import BrickClump, quaternion_matrices
+from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
 from orchestrator.post.front import flat_phases
@@ -78,7 +78,7 @@ def plot_deposit(trajectory: Trajectory, brick: BrickClump, path: Path, slope_de
     members = deposit.deposit_members(final, trajectory.radius)
     metrics = deposit.deposit_metrics(trajectory.position[0], final, trajectory.mass, trajectory.radius)
     rotations = quaternion_matrices(np.nan_to_num(trajectory.orientation[-1, members], nan=1.0))
-    spheres = final[members][:, None, :] + np.einsum("bij,sj->bsi", rotations, brick.centres)
+    spheres = bodies_sphere_centres(brick, final[members], rotations)
     radii = np.broadcast_to(brick.radii, spheres.shape[:2])
     x_edges, y_edges, thickness = deposit.thickness_map(spheres.reshape(-1, 3), radii.reshape(-1), slope_deg, brick.width / 2)
     fig, (plan, section) = subplots(2, 1, figsize=(8, 9), constrained_layout=True, gridspec_kw={"height_ratios": [2, 1]})
