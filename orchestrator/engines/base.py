@@ -62,7 +62,7 @@ class EngineInfo:
 class EngineAdapter(Protocol):
     name: str
     # What the engine cannot do exactly for the case of the last write_input (recorded in run.json).
-    warnings: list[str]
+    warnings: tuple[str, ...]
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "EngineAdapter":
@@ -89,7 +89,7 @@ class AdapterDefaults:
     """What most adapters share: no run options, the templates as build inputs, no warnings."""
 
     name: str
-    warnings: list[str] = []  # an adapter that has some sets its own list in write_input
+    warnings: tuple[str, ...] = ()  # an adapter that has some sets its own in write_input
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "AdapterDefaults":

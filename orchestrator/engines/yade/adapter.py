@@ -62,7 +62,7 @@ class YadeAdapter(AdapterDefaults):
         # spring-dashpot with the same loading stiffness and restitution (docs/engines.md).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
         scale, warning = stand_in_scale(case)
-        self.warnings = [warning] if warning else []
+        self.warnings = (warning,) if warning else ()
         pairs = [replace(p, cn=p.cn * scale) if p.law is ContactLaw.bilinear else p for p in prepared.pairs]
         as_boxes = [rectangle_box(wall) for wall in case.walls]
         boxes = [box for box in as_boxes if box is not None]
