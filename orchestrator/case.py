@@ -31,22 +31,22 @@ def _reject_bool(value: object) -> object:
     return value
 
 
-FiniteFloat = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False)]
-Vec3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+def Real(*, unit: str, **bounds: float) -> object:
+    """A finite float with its unit and bounds, e.g. Real(unit="s", gt=0, le=1) (pydantic Field
+    keywords); the unit ("1": dimensionless) goes into the JSON Schema and the field reference."""
+    return Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, json_schema_extra={"unit": unit}, **bounds)]
+
+
 # Physical bounds of the vectors of a case, far beyond any granular flow but finite: a coordinate of
 # 1e300 m or a speed of 1e8 m/s is a typo, and an engine would meet it as an overflow.
-Coordinate = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e4, le=1e4)]  # m
-Speed = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e3, le=1e3)]  # m/s
-Spin = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e5, le=1e5)]  # rad/s
-Acceleration = Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, ge=-1e3, le=1e3)]  # m/s²
+Coordinate = Real(unit="m", ge=-1e4, le=1e4)
+Speed = Real(unit="m/s", ge=-1e3, le=1e3)
+Spin = Real(unit="rad/s", ge=-1e5, le=1e5)
+Acceleration = Real(unit="m/s²", ge=-1e3, le=1e3)
 Position = tuple[Coordinate, Coordinate, Coordinate]
 Velocity = tuple[Speed, Speed, Speed]
 AngularVelocity = tuple[Spin, Spin, Spin]
-
-
-def Real(**bounds: float) -> object:
-    """A finite float with bounds, e.g. Real(gt=0, le=1) (pydantic Field keywords)."""
-    return Annotated[float, BeforeValidator(_reject_bool), Field(allow_inf_nan=False, **bounds)]
+QuaternionPart = Real(unit="1")
 
 
 class Strict(BaseModel):
@@ -68,22 +68,22 @@ class RestStop(Strict):
     is each body's centre speed (YADE, cocd) or, with LIGGGHTS, each clump sphere's (centre plus spin).
     """
 
-    speed: Real(gt=0.0, le=10.0) = 0.005
-    after: Real(ge=0.0, le=1e4) = 0.0
-    check_interval: Real(gt=0.0, le=1e4) = 0.1
-    stray_fraction: Real(ge=0.0, le=0.1) | None = None
+    speed: Real(unit="m/s", gt=0.0, le=10.0) = 0.005
+    after: Real(unit="s", ge=0.0, le=1e4) = 0.0
+    check_interval: Real(unit="s", gt=0.0, le=1e4) = 0.1
+    stray_fraction: Real(unit="1", ge=0.0, le=0.1) | None = None
 
 
 class TimeSettings(Strict):
     """Time integration. `step: auto` derives Δt from the stiffest contact and the lightest body."""
 
-    step: Union[Literal["auto"], float] = "auto"
+    step: Union[Literal["auto"], float] = Field("auto", json_schema_extra={"unit": "s"})
     # Δt = safety_factor × the shortest contact duration. Default (None): 0.02 (50 steps per
     # contact) for the bilinear law on LIGGGHTS, which has no damping term to integrate; 0.01
     # (100 steps) otherwise, for the explicit dashpots (see physics.default_safety_factor).
-    safety_factor: Real(gt=0.0, le=0.5) | None = None
-    duration: Real(gt=0.0, le=1e4)
-    output_interval: Real(gt=0.0, le=1e4)
+    safety_factor: Real(unit="1", gt=0.0, le=0.5) | None = None
+    duration: Real(unit="s", gt=0.0, le=1e4)
+    output_interval: Real(unit="s", gt=0.0, le=1e4)
     # None: run the whole duration. Otherwise the duration is an upper bound (see RestStop).
     stop_at_rest: RestStop | None = None
 
@@ -98,7 +98,7 @@ class TimeSettings(Strict):
 
 class Material(Strict):
     name: Name
-    density: Real(gt=0.0, le=1e5)
+    density: Real(unit="kg/m³", gt=0.0, le=1e5)
 
 
 class ContactLaw(str, Enum):
@@ -114,10 +114,10 @@ class ContactPair(Strict):
 
     materials: tuple[Name, Name]
     law: ContactLaw = ContactLaw.linear
-    en2: Real(gt=0.0, le=1.0)
-    mu: Real(ge=0.0, le=10.0)
-    kn: Real(gt=0.0, le=1e12)
-    kt_over_kn: Real(ge=0.0, le=10.0)
+    en2: Real(unit="1", gt=0.0, le=1.0)
+    mu: Real(unit="1", ge=0.0, le=10.0)
+    kn: Real(unit="N/m", gt=0.0, le=1e12)
+    kt_over_kn: Real(unit="1", ge=0.0, le=10.0)
 
     @property
     def key(self) -> frozenset[str]:
@@ -126,7 +126,7 @@ class ContactPair(Strict):
 
 class Sphere(Strict):
     material: Name
-    radius: Real(gt=0.0, le=10.0)
+    radius: Real(unit="m", gt=0.0, le=10.0)
     position: Position
     velocity: Velocity = (0.0, 0.0, 0.0)
     angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
@@ -143,18 +143,18 @@ class BrickShape(Strict):
     """
 
     name: Name
-    length: Real(gt=0.0, le=10.0)
-    width: Real(gt=0.0, le=10.0)
-    thickness: Real(gt=0.0, le=10.0)
+    length: Real(unit="m", gt=0.0, le=10.0)
+    width: Real(unit="m", gt=0.0, le=10.0)
+    thickness: Real(unit="m", gt=0.0, le=10.0)
     layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
-    bevel_deg: Real(ge=0.0, le=10.0) = 0.0
+    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0
     # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
     # thickness axes) when given; default: those of the (rounded) box at the material's density.
-    mass: Real(gt=0.0, le=1e4) | None = None
-    inertia: tuple[Real(gt=0.0, le=1e4), Real(gt=0.0, le=1e4), Real(gt=0.0, le=1e4)] | None = None
+    mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
+    inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
     # Edges and corners rounded at this radius (m): eight corner spheres join the layout (bricks.py).
     # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
-    rounding: Real(ge=0.0, le=1.0) = 0.0
+    rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
 
     @model_validator(mode="after")
     def _physical_inertia(self) -> "BrickShape":
@@ -177,7 +177,7 @@ class Clump(Strict):
     shape: Name
     material: Name
     position: Position
-    orientation: tuple[FiniteFloat, FiniteFloat, FiniteFloat, FiniteFloat] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
+    orientation: tuple[QuaternionPart, QuaternionPart, QuaternionPart, QuaternionPart] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
     velocity: Velocity = (0.0, 0.0, 0.0)
     angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
 
@@ -211,7 +211,7 @@ class RectangleWall(Strict):
     origin: Position
     edge1: Position
     edge2: Position
-    remove_at: Real(gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
+    remove_at: Real(unit="s", gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
 
     @model_validator(mode="after")
     def _not_degenerate(self) -> "RectangleWall":
@@ -230,8 +230,8 @@ class MeshWall(Strict):
     name: Name
     material: Name
     file: Annotated[str, Field(min_length=1, max_length=4096)]
-    scale: Real(gt=0.0, le=1e6) = 1.0
-    remove_at: Real(gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
+    scale: Real(unit="1", gt=0.0, le=1e6) = 1.0
+    remove_at: Real(unit="s", gt=0.0, le=1e4) | None = None  # s: the wall disappears then (a trap opening)
 
     @field_validator("file")
     def _stl_suffix(cls, value: str) -> str:
@@ -281,6 +281,10 @@ class Case(EngineSections, Strict):
     # lie in y = const stay there by symmetry; YADE also blocks those degrees of freedom, LIGGGHTS
     # zeroes the y force.
     planar: bool = False
+    # Record every contact at each output frame into results.h5 (/contacts: bodies, point, normal and
+    # tangential force, branch; per-body contact counts and force sums; coordination number). Opt-in:
+    # a dense pile has several contacts per body, so this multiplies the output.
+    record_contacts: bool = False
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":
@@ -373,6 +377,7 @@ def engine_limits(case: Case) -> str | None:
         ("initial_state", case.initial_state is not None, "restart",
          f"{engine} cannot start from a state file; give the saved positions, orientations and velocities in `bodies`"),
         ("walls", any(isinstance(w, MeshWall) for w in case.walls), "meshes", f"{engine} takes rectangle walls only"),
+        ("record_contacts", case.record_contacts, "contact_output", f"{engine} does not record contacts"),
     ]
     for field, used, capability, reason in checks:
         if used and not getattr(can, capability):

@@ -12,6 +12,24 @@ Layout (identical for every engine):
     /frames/angular_velocity  (frames, bodies, 3)  rad/s
     /frames/orientation       (frames, bodies, 4)  unit quaternion (w, x, y, z); NaN where the
                                                    engine does not track it (LIGGGHTS spheres)
+With contacts recorded (the case's `record_contacts`), also (CONTACT_LAYOUT):
+    /contacts/offset          (frames + 1,)        rows of frame f are offset[f]:offset[f+1]
+    /contacts/body            (rows, 2)            the two bodies' indices in /bodies (0-based);
+                                                   the second is -1 for a wall
+    /contacts/wall            (rows,)              the wall's index in the case's `walls`, -1 for a
+                                                   body–body contact
+    /contacts/point           (rows, 3)            m, contact point
+    /contacts/normal_force    (rows, 3)            N, normal force on the first body
+    /contacts/tangential_force (rows, 3)           N, tangential (friction) force on the first body
+    /contacts/branch          (rows, 3)            m, first body's centre to the second's (to the
+                                                   contact point for a wall)
+    /contacts/coordination    (frames,)            coordination number 2 N_c / N_b: N_c touching
+                                                   body pairs, N_b bodies present (walls left out)
+    /frames/contact_count     (frames, bodies)     contacts of each body (walls included; a clump
+                                                   touching at several spheres counts each)
+    /frames/normal_force_sum  (frames, bodies)     N, Σ |normal force| over each body's contacts
+One row is one sphere–sphere or sphere–wall contact: a clump touching another at three spheres has
+three rows. Forces are those the engine computed at the frame's step (YADE: at the step before).
 Root attributes (ATTRIBUTES): format_version, engine, engine_version, case_name,
 orientation_tracked (False where orientations are NaN); stopped_at_rest (s) and rest_speed (m/s)
 when the run ended at rest. A body missing from a frame (lost by the engine) has NaN state there.
@@ -57,8 +75,111 @@ LAYOUT: dict[str, tuple[str, int]] = {
     "frames/angular_velocity": ("f", 3),
     "frames/orientation": ("f", 3),
 }
+CONTACT_LAYOUT: dict[str, tuple[str, int]] = {
+    "contacts/offset": ("i", 1),
+    "contacts/body": ("i", 2),
+    "contacts/wall": ("i", 1),
+    "contacts/point": ("f", 2),
+    "contacts/normal_force": ("f", 2),
+    "contacts/tangential_force": ("f", 2),
+    "contacts/branch": ("f", 2),
+    "contacts/coordination": ("f", 1),
+    "frames/contact_count": ("i", 2),
+    "frames/normal_force_sum": ("f", 2),
+}
 ATTRIBUTES = ("format_version", "engine", "engine_version", "case_name", "orientation_tracked")  # always written
 REST_ATTRIBUTES = ("stopped_at_rest", "rest_speed")  # written when the run ended at rest
+
+
+@dataclass
+class Contacts:
+    """Every contact of every frame, frames stacked (arrays as /contacts/* in the module docstring)."""
+
+    offset: np.ndarray  # (frames + 1,) int
+    body: np.ndarray  # (rows, 2) int, second -1 for a wall
+    wall: np.ndarray  # (rows,) int, -1 for a body pair
+    point: np.ndarray  # (rows, 3) m
+    normal_force: np.ndarray  # (rows, 3) N, on the first body
+    tangential_force: np.ndarray  # (rows, 3) N, on the first body
+
+    RAW = ("offset", "body", "wall", "point", "normal_force", "tangential_force")
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.offset.shape[0]) - 1
+
+    def frame(self, f: int) -> slice:
+        """The rows of frame f."""
+        return slice(int(self.offset[f]), int(self.offset[f + 1]))
+
+    @classmethod
+    def from_frames(cls, frames: list[np.ndarray]) -> "Contacts":
+        """From per-frame (rows, 12) arrays: body 1, body 2, wall, point (3), normal force (3), tangential force (3)."""
+        rows = np.concatenate(frames) if frames else np.empty((0, 12))
+        offset = np.concatenate([[0], np.cumsum([len(f) for f in frames])]).astype(np.int64)
+        return cls(offset, rows[:, 0:2].astype(np.int64), rows[:, 2].astype(np.int64), rows[:, 3:6], rows[:, 6:9], rows[:, 9:12])
+
+    def frame_index(self) -> np.ndarray:
+        """(rows,) the frame of each row."""
+        return np.repeat(np.arange(self.n_frames), np.diff(self.offset))
+
+    def per_body(self, bodies: int) -> tuple[np.ndarray, np.ndarray]:
+        """(frames, bodies) int contact counts and (frames, bodies) N sums of |normal force|.
+
+        Both bodies of a pair count the contact (a wall counts for its body only); a clump touching
+        at several spheres counts each. Enough to find contact episodes and rebounds without
+        reading rows.
+        """
+        frames = self.frame_index()
+        magnitude = np.linalg.norm(self.normal_force, axis=1)
+        count = np.zeros((self.n_frames, bodies), dtype=np.int64)
+        force = np.zeros((self.n_frames, bodies))
+        for side in (0, 1):
+            body = self.body[:, side]
+            real = body >= 0
+            np.add.at(count, (frames[real], body[real]), 1)
+            np.add.at(force, (frames[real], body[real]), magnitude[real])
+        return count, force
+
+    def branch(self, position: np.ndarray) -> np.ndarray:
+        """(rows, 3) m: from the first body's centre to the second's, or to the contact point for a
+        wall. position: the trajectory's (frames, bodies, 3)."""
+        frames = self.frame_index()
+        first = position[frames, self.body[:, 0]]
+        wall = self.body[:, 1] < 0
+        second = np.where(wall[:, None], self.point, position[frames, np.maximum(self.body[:, 1], 0)])
+        return second - first
+
+    def touching_pairs(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        """Body pairs touching in one frame: (pairs, 2) body indices (lower first, each pair once)
+        and (pairs,) N their summed |normal force| (several sphere contacts of two clumps add up)."""
+        rows = self.frame(frame % self.n_frames)
+        body = self.body[rows]
+        pairs = body[:, 1] >= 0
+        if not pairs.any():
+            return np.empty((0, 2), dtype=np.int64), np.empty(0)
+        keys, inverse = np.unique(np.sort(body[pairs], axis=1), axis=0, return_inverse=True)
+        force = np.bincount(inverse.ravel(), weights=np.linalg.norm(self.normal_force[rows][pairs], axis=1), minlength=len(keys))
+        return keys, force
+
+    def coordination(self, position: np.ndarray) -> np.ndarray:
+        """(frames,) coordination number Z = 2 N_c / N_b: N_c touching body pairs (walls left out),
+        N_b bodies present in the frame (finite position)."""
+        present = np.isfinite(position[..., 0]).sum(axis=1)
+        touching = np.array([len(self.touching_pairs(f)[0]) for f in range(self.n_frames)])
+        return np.where(present > 0, 2.0 * touching / np.maximum(present, 1), 0.0)
+
+    def validate(self, frames: int, bodies: int) -> None:
+        rows = int(self.offset[-1]) if len(self.offset) else 0
+        if self.n_frames != frames or self.offset[0] != 0 or np.any(np.diff(self.offset) < 0):
+            raise ValueError(f"contacts offset must rise from 0 over {frames} frames")
+        for name, width in (("body", 2), ("point", 3), ("normal_force", 3), ("tangential_force", 3)):
+            if getattr(self, name).shape != (rows, width):
+                raise ValueError(f"contacts {name} has shape {getattr(self, name).shape}, expected {(rows, width)}")
+        if self.wall.shape != (rows,):
+            raise ValueError("contacts wall must have one entry per row")
+        if rows and (self.body[:, 0].min() < 0 or self.body.max() >= bodies):
+            raise ValueError("contacts name a body that is not in the trajectory")
 
 
 @dataclass
@@ -76,6 +197,7 @@ class Trajectory:
     angular_velocity: np.ndarray
     orientation: np.ndarray
     attrs: dict[str, object] = field(default_factory=dict)
+    contacts: Contacts | None = None  # recorded when the case asks (record_contacts)
 
     @property
     def n_frames(self) -> int:
@@ -102,6 +224,8 @@ class Trajectory:
                 raise ValueError(f"trajectory {name} must have one entry per body")
         if self.inertia.shape != (bodies, 3):
             raise ValueError("trajectory inertia must have three principal moments per body")
+        if self.contacts is not None:
+            self.contacts.validate(frames, bodies)
 
 
 def write_results(path: Path, trajectory: Trajectory) -> None:
@@ -123,7 +247,22 @@ def write_results(path: Path, trajectory: Trajectory) -> None:
         chunk = lambda width: (1, trajectory.n_bodies, width)  # noqa: E731 - one frame per chunk
         for name, width in (("position", 3), ("velocity", 3), ("angular_velocity", 3), ("orientation", 4)):
             frames.create_dataset(name, data=getattr(trajectory, name), chunks=chunk(width) if trajectory.n_frames else None)
+        if trajectory.contacts is not None:
+            _write_contacts(store, trajectory)
     os.replace(temporary, path)
+
+
+def _write_contacts(store: h5py.File, trajectory: Trajectory) -> None:
+    recorded = trajectory.contacts
+    assert recorded is not None
+    group = store.create_group("contacts")
+    for name in Contacts.RAW:
+        group.create_dataset(name, data=getattr(recorded, name))
+    group.create_dataset("branch", data=recorded.branch(trajectory.position))
+    group.create_dataset("coordination", data=recorded.coordination(trajectory.position))
+    count, force = recorded.per_body(trajectory.n_bodies)
+    store["frames"].create_dataset("contact_count", data=count)
+    store["frames"].create_dataset("normal_force_sum", data=force)
 
 
 def read_results(path: Path) -> Trajectory:
@@ -140,6 +279,7 @@ def read_results(path: Path) -> Trajectory:
             angular_velocity=store["frames/angular_velocity"][()],
             orientation=store["frames/orientation"][()],
             attrs={key: _plain(value) for key, value in store.attrs.items()},
+            contacts=Contacts(*(store[f"contacts/{name}"][()] for name in Contacts.RAW)) if "contacts" in store else None,
         )
 
 

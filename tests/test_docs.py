@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from orchestrator.case import Case
-from orchestrator.cli.schema import models, reference
+from orchestrator.cli.schema import _rows, models, reference, schema
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -33,6 +33,15 @@ def test_every_case_field_is_in_the_reference() -> None:
     text = (REPO / "docs" / "reference" / "case.md").read_text()
     for name in Case.model_fields:
         assert f"| {name} |" in text, name
+
+
+@pytest.mark.parametrize("kind", sorted(models()))
+def test_every_number_field_states_its_unit(kind: str) -> None:
+    """Real numbers carry a unit ("1" when dimensionless); integers are counts and seeds."""
+    document = schema(kind)
+    rows = [row for row in _rows(document, document.get("$defs", {}), "") if "number" in row[1]]
+    assert rows
+    assert [row[0] for row in rows if not row[2]] == []
 
 
 def test_the_readme_is_short_and_starts_with_the_two_commands() -> None:

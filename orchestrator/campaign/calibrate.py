@@ -82,9 +82,10 @@ def e2_error(sim_time: np.ndarray, sim_corners: np.ndarray, times: np.ndarray, m
 
 class ParameterSpec(Strict):
     path: ParameterPath
-    start: float
-    low: float
-    high: float
+    # In the unit of the field at `path`.
+    start: Annotated[float, Field(json_schema_extra={"unit": "that of the field at path"})]
+    low: Annotated[float, Field(json_schema_extra={"unit": "that of the field at path"})]
+    high: Annotated[float, Field(json_schema_extra={"unit": "that of the field at path"})]
 
 
 class CalibrationSpec(Strict):
@@ -94,10 +95,10 @@ class CalibrationSpec(Strict):
     parameters: Annotated[list[ParameterSpec], Field(min_length=1)]
     method: Literal["cma", "nelder-mead", "differential-evolution"] = "cma"
     max_runs: Annotated[int, Field(ge=1, le=100_000)] = 200
-    sigma0: Annotated[float, Field(gt=0.0, le=1.0)] = 0.3  # CMA-ES step, as a fraction of each range
+    sigma0: Annotated[float, Field(gt=0.0, le=1.0, json_schema_extra={"unit": "1"})] = 0.3  # CMA-ES step, as a fraction of each range
     seed: Annotated[int, Field(ge=1)] = 1
     jobs: Annotated[int, Field(ge=1, le=1024)] = 2
-    tolerance: Annotated[float, Field(gt=0.0)] = 1e-3  # on the normalised parameters
+    tolerance: Annotated[float, Field(gt=0.0, json_schema_extra={"unit": "1"})] = 1e-3  # on the normalised parameters
 
 
 @dataclass

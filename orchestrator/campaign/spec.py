@@ -76,7 +76,7 @@ class CampaignSpec(Strict):
     designs: list[Design] = []
     replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
     derived: dict[ParameterPath, str] = {}
-    timeout_s: Annotated[float, Field(gt=0)] | None = None
+    timeout_s: Annotated[float, Field(gt=0, json_schema_extra={"unit": "s"})] | None = None
 
 
 def base_kind(spec: CampaignSpec, base: dict[str, Any]) -> str:

@@ -32,8 +32,11 @@ def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -
     pictures.plot_front(report, figures / "front.png")
     snapshots = pictures.plot_snapshots(trajectory, figures, slope_deg=slope_deg)
     pictures.export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
+    chains = [figures / "force_chains.png"] if trajectory.contacts is not None else []
+    if chains:
+        pictures.plot_force_chains(trajectory, chains[0])
     rows = pictures.comparison_rows(report, load_reference())
-    return pictures.write_html(figures, outdir.name, rows, [figures / "deposit.png", figures / "front.png", *snapshots])
+    return pictures.write_html(figures, outdir.name, rows, [figures / "deposit.png", *chains, figures / "front.png", *snapshots])
 
 
 def study_table(title: str, report: dict[str, Any]) -> Table:

@@ -22,6 +22,7 @@ from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
+from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
 from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
@@ -203,7 +204,7 @@ def build_contact(force: bool) -> None:
         console.print_json(json.dumps(adapter.law_plugin_status(), default=str))
 
 
-for command in (avalanche, demo, campaign, collapse, parity, schema_command):
+for command in (avalanche, demo, campaign, collapse, parity, validation, schema_command):
     main.add_command(command)
 
 

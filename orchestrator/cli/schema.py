@@ -80,15 +80,27 @@ def _describe(node: dict[str, Any]) -> str:
     return kind + (f" matching `{node['pattern']}`" if "pattern" in node else "")
 
 
-def _rows(node: dict[str, Any], defs: dict[str, Any], path: str) -> list[tuple[str, str, str, str]]:
-    """(field path, type and range, default, description) of every field under an object schema."""
+def unit(node: dict[str, Any], defs: dict[str, Any]) -> str:
+    """The unit of a number field (case.Real: "1" dimensionless), of a vector's items, or ""."""
+    if node.get("unit"):
+        return str(node["unit"])
+    for choice in _choices(node, defs):
+        items = choice.get("prefixItems") or ([choice["items"]] if isinstance(choice.get("items"), dict) else [])
+        found = choice.get("unit") or next((unit(i, defs) for i in items if unit(i, defs)), "")
+        if found:
+            return str(found)
+    return ""
+
+
+def _rows(node: dict[str, Any], defs: dict[str, Any], path: str) -> list[tuple[str, str, str, str, str]]:
+    """(field path, type and range, unit, default, description) of every field under an object schema."""
     rows = []
     for name, field in node.get("properties", {}).items():
         here = f"{path}.{name}" if path else name
         choices = _choices(field, defs)
         default = "required" if name in node.get("required", []) else f"`{field['default']!r}`" if "default" in field else ""
         text = field.get("description") or next((c.get("description", "") for c in choices if c.get("type", "object") == "object"), "")
-        rows.append((here, " or ".join(_describe(c) for c in choices), default, " ".join(text.split())))
+        rows.append((here, " or ".join(_describe(c) for c in choices), unit(field, defs), default, " ".join(text.split())))
         for choice in choices:
             inner = _resolve(choice.get("items", {}), defs) if choice.get("type") == "array" else choice
             for alternative in _choices(inner, defs) if "properties" not in inner else [inner]:
@@ -104,8 +116,8 @@ def reference(kind: str) -> str:
     document = schema(kind)
     lines = [f"# {kind.capitalize()} file reference", "",
              f"Generated from the models by `demorch schema --reference docs/reference` (JSON Schema: `schemas/{kind}.schema.json`). "
-             "Units are SI (m, s, kg, rad); `[]` marks a list item.", "",
-             "| field | type and range | default | meaning |", "|---|---|---|---|"]
+             "Units are SI; `1` marks a dimensionless number, `[]` a list item.", "",
+             "| field | type and range | unit | default | meaning |", "|---|---|---|---|---|"]
     for row in _rows(document, document.get("$defs", {}), ""):
         lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |")
     return "\n".join(lines) + "\n"

@@ -30,6 +30,7 @@ class Capabilities:
     placement_tolerance: m; how far from the requested centre the engine may place a clump when it
         inserts it (packings leave twice that between bricks).
     state_file: the file `save_state` writes in the run directory (None: no restart file).
+    contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
     """
 
     clumps: bool
@@ -42,6 +43,7 @@ class Capabilities:
     placement_tolerance: float = 0.0
     default_step: float | None = None
     state_file: str | None = None
+    contact_output: bool = False
 
 
 @dataclass(frozen=True)
@@ -63,14 +65,14 @@ ENGINES: dict[str, EngineEntry] = {
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             # Measured: a multisphere template is inserted within 1 mm of the requested centre.
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
-                         implicit=False, placement_tolerance=1e-3, state_file="state.restart"),
+                         implicit=False, placement_tolerance=1e-3, state_file="state.restart", contact_output=True),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
         ),
         EngineEntry(
             "yade",
             "orchestrator.engines.yade.adapter:YadeAdapter",
             Capabilities(clumps=True, mixed_bodies=True, meshes=True, mpi=False, restart=False, compiled_law=False,
-                         implicit=False),
+                         implicit=False, contact_output=True),
             "YADE 2023.02a (Debian), the bilinear law emulated by a dashpot",
             (("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
              ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)")),

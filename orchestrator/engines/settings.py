@@ -19,7 +19,7 @@ class CocdSettings(_Section):
     """The cocd engine's solver: Clarabel (interior point, reference), SCS (first order), PIQP (2D only)."""
 
     solver: Literal["clarabel", "scs", "piqp"] = "clarabel"
-    tolerance: Annotated[float, Field(gt=0.0, le=1e-2, allow_inf_nan=False)] = 1e-8
+    tolerance: Annotated[float, Field(gt=0.0, le=1e-2, allow_inf_nan=False, json_schema_extra={"unit": "1"})] = 1e-8
 
 
 class EngineSections(_Section):
@@ -36,7 +36,7 @@ class StudyEngineSections(EngineSections):
     """A study's engine-only sections: those of its cases, and the step of an implicit engine."""
 
     # cocd has no contact stiffness, so no contact duration to take a fraction of: its step is this.
-    cocd_step: Annotated[float, Field(gt=0.0, le=0.01, allow_inf_nan=False)] = 1e-3
+    cocd_step: Annotated[float, Field(gt=0.0, le=0.01, allow_inf_nan=False, json_schema_extra={"unit": "s"})] = 1e-3
 
     def implicit_step(self) -> float:
         """Δt (s) for an engine with the `implicit` capability."""

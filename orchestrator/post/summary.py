@@ -59,4 +59,6 @@ def summary(trajectory: Trajectory) -> dict[str, float]:
         "final_mean_speed_m_s": float(np.nanmean(final_speed)),
         "final_kinetic_energy_J": float(kinetic_energy(trajectory)[-1]),
         "fraction_at_rest": float(np.mean(final_speed[present] < REST_SPEED)) if present.any() else 0.0,
+        **({"final_coordination_number": float(trajectory.contacts.coordination(trajectory.position)[-1]),
+            "final_contacts": float(np.diff(trajectory.contacts.offset)[-1])} if trajectory.contacts is not None else {}),
     }

@@ -163,10 +163,15 @@ def tilted_metrics(drop: Drop) -> dict[str, Any]:
     return metrics
 
 
-def run_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> dict[str, Any]:
-    """Run one drop in `directory` and return its metrics (flat_metrics or tilted_metrics)."""
+def measure_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> tuple[dict[str, Any], Drop]:
+    """Run one drop in `directory`: its metrics (flat_metrics or tilted_metrics) and its Drop."""
     case = drop_case(engine, shape, constants, tilted)
     run_case(case, directory, directory / "run")
     clump = case.shape(shape["name"]).clump(case.material("brick").density)
     drop = Drop.from_trajectory(read_results(directory / "run" / RESULTS), clump)
-    return tilted_metrics(drop) if tilted else flat_metrics(drop)
+    return (tilted_metrics(drop) if tilted else flat_metrics(drop)), drop
+
+
+def run_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> dict[str, Any]:
+    """Run one drop in `directory` and return its metrics (flat_metrics or tilted_metrics)."""
+    return measure_drop(engine, shape, constants, tilted, directory)[0]

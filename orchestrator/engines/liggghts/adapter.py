@@ -12,12 +12,13 @@ import numpy as np
 
 from orchestrator import physics
 from orchestrator.case import Case, ContactLaw
-from orchestrator.results import Trajectory
+from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.options import RunOptions
 from orchestrator.engines.liggghts import deck, plugin
-from orchestrator.engines.liggghts.deck import CLUMP_COLUMNS, DECK_NAME, DUMP_NAME, INSTALL_HINT, SPHERE_COLUMNS, TEXT_DUMP_NAME
-from orchestrator.engines.liggghts.dump import clump_states, read_binary_dump, read_dump, sphere_states
+from orchestrator.engines.liggghts.deck import (CLUMP_COLUMNS, CONTACT_PAIRS_NAME, CONTACT_WALLS_NAME, DECK_NAME, DUMP_NAME, INSTALL_HINT,
+                                                SPHERE_COLUMNS, TEXT_DUMP_NAME)
+from orchestrator.engines.liggghts.dump import clump_states, contact_rows, read_binary_dump, read_dump, read_local_dump, sphere_states
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
@@ -136,12 +137,14 @@ class LiggghtsAdapter(AdapterDefaults):
             raise EngineError("the engine wrote no dump frames", deck, rundir / "engine.log")
         column = {name: i for i, name in enumerate(columns)}
         if "id_multisphere" in column:
-            position, velocity, spin, orientation = clump_states(case, column, frames)
+            position, velocity, spin, orientation, atom_slot = clump_states(case, column, frames)
             ids = np.arange(1, len(case.bodies.clumps) + 1)
         else:
             ids = frames[0][:, 0].astype(np.int64)
             position, velocity, spin = sphere_states(ids, column, frames)
             orientation = np.full(position.shape[:2] + (4,), np.nan)
+            atom_slot = np.full(int(ids.max()) + 1, -1, dtype=np.int64)
+            atom_slot[ids] = np.arange(len(ids))
         return Trajectory(
             time=np.asarray(steps, dtype=float) * dt,
             ids=ids,
@@ -154,4 +157,17 @@ class LiggghtsAdapter(AdapterDefaults):
             angular_velocity=spin,
             orientation=orientation,
             attrs={"orientation_tracked": "id_multisphere" in column, **common.at_rest_attrs(rundir, dt)},
+            contacts=self.read_contacts(case, rundir, steps, atom_slot) if case.record_contacts else None,
         )
+
+    @staticmethod
+    def read_contacts(case: Case, rundir: Path, steps: list[int], atom_slot: np.ndarray) -> Contacts:
+        """The contacts of each dumped frame (steps), from the deck's two `dump local` files. A wall's
+        mesh number is its place among the walls present at that step (removed walls leave `fix walls`)."""
+        pairs, walls = read_local_dump(rundir / CONTACT_PAIRS_NAME), read_local_dump(rundir / CONTACT_WALLS_NAME)
+        removal = physics.removal_steps(case, physics.schedule(case))
+        frames = []
+        for step in steps:
+            present = [i for i, wall in enumerate(case.walls) if removal.get(wall.name, step) >= step]
+            frames.append(contact_rows(pairs.get(step), walls.get(step), atom_slot, present))
+        return Contacts.from_frames(frames)

@@ -18,6 +18,8 @@ DUMP_NAME = "frames.bin"  # binary `dump custom` (LIGGGHTS writes binary when th
 TEXT_DUMP_NAME = "frames.dump"  # runs made before the binary dump; still read
 SPHERE_COLUMNS = ("id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz")
 CLUMP_COLUMNS = ("id", "id_multisphere", *SPHERE_COLUMNS[1:])
+CONTACT_PAIRS_NAME = "contacts_pairs.dump"  # `dump local` of pair/gran/local (record_contacts)
+CONTACT_WALLS_NAME = "contacts_walls.dump"  # `dump local` of wall/gran/local (record_contacts)
 STATE_NAME = "state.restart"  # written at the end when the case has `save_state`
 INITIAL_STATE_NAME = "initial.restart"  # the `initial_state` a case starts from, linked into the run
 INSTALL_HINT = "apt-get install -y liggghts libliggghts-dev openmpi-bin mpi-default-dev"
@@ -149,9 +151,9 @@ def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
     for step in sorted(set(removals.values())):
         removed = [name for name, at in removals.items() if at == step]
         remaining = [name for name in remaining if name not in removed]
-        segments.append({"steps": step - done, "remove": removed, "remaining": remaining})
+        segments.append({"steps": step - done, "end": step, "remove": removed, "remaining": remaining})
         done = step
-    segments.append({"steps": plan.total_steps - done, "remove": [], "remaining": remaining})
+    segments.append({"steps": plan.total_steps - done, "end": plan.total_steps, "remove": [], "remaining": remaining})
     return segments
 
 
@@ -200,6 +202,7 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "data_file": DATA_NAME,
         "dump_file": DUMP_NAME,
         "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
+        "contacts": {"pairs": CONTACT_PAIRS_NAME, "walls": CONTACT_WALLS_NAME} if case.record_contacts else None,
         "skin": skin,
         "binsize": bin_size(prepared.domain, cutoff=2.0 * radius_max + skin, max_bins=max_bins),
         "dt": prepared.schedule.dt,

@@ -24,8 +24,9 @@ def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarr
     return position, velocity, spin
 
 
-def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once.
+def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once:
+    position, velocity, spin, orientation, and atom id → body index (the clump's place in the case).
 
     Orientation: the rotation R that best maps the template's sphere centres onto the dumped ones
     (Kabsch, by a batched SVD), as a (w, x, y, z) quaternion of the brick frame. Centre: the brick's
@@ -78,7 +79,10 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
             orientation[f, slots] = quaternions
             if np.any(template_means[slots]):
                 position[f, slots] = centre - np.einsum("bij,bj->bi", quaternion_matrices(quaternions), template_means[slots])
-    return position, velocity, spin, orientation
+    atoms = frames[0][:, id_column].astype(np.int64)
+    atom_slot = np.full(int(atoms.max()) + 1, -1, dtype=np.int64)
+    atom_slot[atoms] = slot_of[frames[0][:, body_column].astype(np.int64)]
+    return position, velocity, spin, orientation, atom_slot
 
 
 def kabsch_quaternions(world: np.ndarray, template: np.ndarray) -> np.ndarray:
@@ -163,3 +167,48 @@ def read_binary_dump(path: Path, n_columns: int) -> tuple[list[int], list[np.nda
         steps.append(step)
         frames.append(data.reshape(atoms, size_one))
     return steps, frames
+
+
+def read_local_dump(path: Path) -> dict[int, np.ndarray]:
+    """A text `dump local` file as step → (entries, columns) array; a frame cut short by a crash is
+    dropped, frames with no entries are kept (empty)."""
+    found: dict[int, np.ndarray] = {}
+    if not path.exists():
+        return found
+    for block in path.read_text().split("ITEM: TIMESTEP\n")[1:]:
+        lines = block.split("\n", 8)
+        if len(lines) < 8:
+            break
+        step, count, columns = int(lines[0]), int(lines[2]), len(lines[7].split()) - 2
+        data = np.fromstring(lines[8], sep=" ") if len(lines) > 8 else np.empty(0)
+        if data.size != count * columns:
+            break
+        # A dump made again after a wall removal repeats the step it is made at: the first copy goes
+        # with the frame dumped at that step.
+        found.setdefault(step, data.reshape(count, columns))
+    return found
+
+
+def contact_rows(pairs: np.ndarray | None, walls: np.ndarray | None, atom_slot: np.ndarray, wall_index: list[int]) -> np.ndarray:
+    """(rows, 12) contacts of one frame as results.Contacts.from_frames takes them, from the rows of
+    the deck's pair/gran/local dump (id1 id2 periodic, force, normal force, contact point: force on
+    atom 1) and wall/gran/local dump (point on the wall, atom centre, mesh triangle atom, force,
+    normal force: force on the atom). atom_slot: atom id → body index; wall_index: mesh → case wall.
+    A pair counted by two MPI processes is kept once; a clump's own spheres never pair."""
+    out = []
+    if pairs is not None and len(pairs):
+        ids = pairs[:, 0:2].astype(np.int64)
+        _, first = np.unique(np.sort(ids, axis=1), axis=0, return_index=True)
+        pairs, ids = pairs[np.sort(first)], ids[np.sort(first)]
+        body = atom_slot[ids]
+        keep = body[:, 0] != body[:, 1]
+        normal = pairs[keep, 6:9]
+        out.append(np.column_stack([body[keep], np.full(keep.sum(), -1), pairs[keep, 9:12], normal, pairs[keep, 3:6] - normal]))
+    if walls is not None and len(walls):
+        keys = walls[:, 6:9].astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        walls, keys = walls[np.sort(first)], keys[np.sort(first)]
+        normal = walls[:, 12:15]
+        mesh = np.asarray(wall_index, dtype=np.int64)[keys[:, 0]]
+        out.append(np.column_stack([atom_slot[keys[:, 2]], np.full(len(walls), -1), mesh, walls[:, 0:3], normal, walls[:, 9:12] - normal]))
+    return np.concatenate(out).astype(float) if out else np.empty((0, 12))

@@ -17,13 +17,14 @@ from scipy.spatial.transform import Rotation
 from orchestrator import physics
 from orchestrator.bricks import world_sphere_centres
 from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
-from orchestrator.results import Trajectory
+from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 from orchestrator.engines.yade.materials import GLUED, glued_clones, glued_friction, stand_in_scale, yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
+CONTACTS_NAME = "contacts.npy"  # (time, (rows, 12) contacts) per frame, when the case records contacts
 INSTALL_HINT = "apt-get install -y yade python3-yade"
 
 _PROGRESS = re.compile(r"^DEMORCH_PROGRESS (\S+) (\S+)$")
@@ -98,6 +99,8 @@ class YadeAdapter(AdapterDefaults):
             "output_every": prepared.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
             "frames_file": FRAMES_NAME,
+            "contacts_file": CONTACTS_NAME if case.record_contacts else None,
+            "walls": [wall.name for wall in case.walls],
             "materials": materials + clones,
             "friction": friction,
             "spheres": spheres,
@@ -124,7 +127,11 @@ class YadeAdapter(AdapterDefaults):
             raise EngineError("YADE ended without finishing the script", script, rundir / "engine.log", tail)
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
-        return common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
+        trajectory = common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
+        if case.record_contacts:
+            _, rows = common.read_frames(rundir / CONTACTS_NAME)
+            trajectory.contacts = Contacts.from_frames(rows[: trajectory.n_frames])
+        return trajectory
 
 
 def rectangle_box(wall: Wall) -> tuple[str, str, list[float], list[float], list[float]] | None:

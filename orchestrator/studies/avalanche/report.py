@@ -17,6 +17,7 @@ import numpy as np
 from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
+from orchestrator.post.contacts import force_chains
 from orchestrator.post.front import flat_phases
 from orchestrator.results import Trajectory
 
@@ -136,6 +137,40 @@ def plot_front(report: dict[str, Any], path: Path) -> None:
     right.set_xlabel("front position on the flat board (m)")
     right.set_ylabel("front velocity (m/s)")
     right.set_title("Front velocity on the flat (cf. the 2012 study, Figs 12c/14c)")
+    fig.savefig(path, dpi=120)
+
+
+def plot_force_chains(trajectory: Trajectory, path: Path, frame: int = -1) -> None:
+    """Force chains of one frame (default: the deposit), side (x, z) and plan (x, y) views: a segment
+    joins the centres of two touching bricks, its width and colour the normal force between them
+    (N, their sphere contacts summed). Same frame as the deposit picture: x from the slope toe,
+    z above the board."""
+    from matplotlib.collections import LineCollection
+
+    assert trajectory.contacts is not None
+    segments, force = force_chains(trajectory.contacts, trajectory.position, frame)
+    z = trajectory.contacts.coordination(trajectory.position)[frame]
+    fig, axes = subplots(2, 1, figsize=(10, 8), constrained_layout=True, gridspec_kw={"height_ratios": [1, 2]})
+    centres = trajectory.position[frame]
+    scale = float(force.max()) if len(force) else 1.0
+    # Framed on the bricks that touch (5 cm around them); bricks elsewhere are left out of the frame.
+    margin = 0.05
+    low = segments.reshape(-1, 3).min(axis=0) - margin if len(force) else np.nanmin(centres, axis=0)
+    high = segments.reshape(-1, 3).max(axis=0) + margin if len(force) else np.nanmax(centres, axis=0)
+    views = (((0, 2), "z above the board (m), stretched", "auto"), ((0, 1), "y across the flow (m)", "equal"))
+    framed = np.all((centres >= low) & (centres <= high), axis=1)
+    for ax, ((a, b), label, aspect) in zip(axes, views):
+        ax.scatter(centres[framed, a], centres[framed, b], s=3, color="0.75", zorder=1)
+        if len(force):
+            lines = LineCollection(segments[:, :, [a, b]], array=force, cmap="inferno_r", linewidths=0.5 + 3.0 * force / scale, zorder=2)
+            ax.add_collection(lines)
+        ax.autoscale_view()
+        ax.set_aspect(aspect, adjustable="datalim")
+        ax.set_xlabel("x from the slope toe (m)")
+        ax.set_ylabel(label)
+    if len(force):
+        fig.colorbar(lines, ax=axes, label="normal force between two bricks (N)")
+    axes[0].set_title(f"Force chains at t = {trajectory.time[frame]:.2f} s: {len(force)} touching pairs, coordination number {z:.2f}")
     fig.savefig(path, dpi=120)
 
 

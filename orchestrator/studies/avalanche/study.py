@@ -38,30 +38,30 @@ def reference_path() -> Path:
 
 
 class GeometrySpec(Strict):
-    slope_deg: Real(gt=0.0, lt=90.0) = 45.0
-    launch_height: Real(gt=0.0, le=100.0) = 1.0
-    board_length: Real(gt=0.0, le=100.0) = 3.0
-    board_width: Real(gt=0.0, le=100.0) = 4.0
-    box_depth: Real(gt=0.0, le=10.0) = 0.6
-    box_width: Real(gt=0.0, le=10.0) = 0.4
-    box_height: Real(gt=0.0, le=10.0) = 0.2
+    slope_deg: Real(unit="°", gt=0.0, lt=90.0) = 45.0
+    launch_height: Real(unit="m", gt=0.0, le=100.0) = 1.0
+    board_length: Real(unit="m", gt=0.0, le=100.0) = 3.0
+    board_width: Real(unit="m", gt=0.0, le=100.0) = 4.0
+    box_depth: Real(unit="m", gt=0.0, le=10.0) = 0.6
+    box_width: Real(unit="m", gt=0.0, le=10.0) = 0.4
+    box_height: Real(unit="m", gt=0.0, le=10.0) = 0.2
 
     def build(self) -> AvalancheGeometry:
         return AvalancheGeometry(**self.model_dump())
 
 
 class BrickSpec(Strict):
-    length: Real(gt=0.0, le=1.0) = 0.031
-    width: Real(gt=0.0, le=1.0) = 0.015
-    thickness: Real(gt=0.0, le=1.0) = 0.008
-    density: Real(gt=0.0, le=1e5) = 1700.0
+    length: Real(unit="m", gt=0.0, le=1.0) = 0.031
+    width: Real(unit="m", gt=0.0, le=1.0) = 0.015
+    thickness: Real(unit="m", gt=0.0, le=1.0) = 0.008
+    density: Real(unit="kg/m³", gt=0.0, le=1e5) = 1700.0
     layout: tuple[int, int, int] = (4, 2, 1)
-    bevel_deg: Real(ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see bricks.py)
+    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see bricks.py)
     # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
     # join the layout, and the brick gets the rounded solid's mass and inertia (bricks.py). With them
     # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
     # (required with a bevel).
-    rounding: Real(ge=0.0, le=0.01) = 0.001
+    rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
 
     @model_validator(mode="after")
     def _rounding_needs_a_box(self) -> "BrickSpec":
@@ -74,10 +74,10 @@ class BrickSpec(Strict):
 
 
 class PairSpec(Strict):
-    en2: Real(gt=0.0, le=1.0)
-    mu: Real(ge=0.0, le=10.0)
-    kn: Real(gt=0.0, le=1e12)
-    kt_over_kn: Real(ge=0.0, le=10.0)
+    en2: Real(unit="1", gt=0.0, le=1.0)
+    mu: Real(unit="1", ge=0.0, le=10.0)
+    kn: Real(unit="N/m", gt=0.0, le=1e12)
+    kt_over_kn: Real(unit="1", ge=0.0, le=10.0)
 
 
 class ContactSpec(Strict):
@@ -90,16 +90,16 @@ class ContactSpec(Strict):
 
 class PackingSpec(Strict):
     kind: Literal["random_pour", "ordered_pile"] = "random_pour"
-    volume: Real(gt=0.0, le=10.0) = 0.04  # m³ of pile at the apparent density below
-    apparent_density: Real(gt=0.0, le=1e4) | None = None  # default: 1000 (pour) or 1600 (pile)
-    settle_time: Real(gt=0.0, le=100.0) = 1.0
+    volume: Real(unit="m³", gt=0.0, le=10.0) = 0.04  # m³ of pile at the apparent density below
+    apparent_density: Real(unit="kg/m³", gt=0.0, le=1e4) | None = None  # default: 1000 (pour) or 1600 (pile)
+    settle_time: Real(unit="s", gt=0.0, le=100.0) = 1.0
     # Set: settle_time is an upper bound and the packing ends once the bricks are at rest.
     stop_at_rest: RestStop | None = None
     # The paper changed contact parameters while packing to reach the target density, then restored
     # them. Default: the study's own contacts. Give them explicitly to share one packing across
     # studies (a campaign) that vary the contacts of the flow only.
     contacts: ContactSpec | None = None
-    brick_brick_mu: Real(ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing
+    brick_brick_mu: Real(unit="1", ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing
     # Ordered pile only: turn each brick half a turn about a random axis, or not (the paper's flips).
     flips: bool = False
 
@@ -111,11 +111,14 @@ class PackingSpec(Strict):
 
 
 class ReleaseSpec(Strict):
-    duration: Real(gt=0.0, le=1000.0) = 4.0
-    output_interval: Real(gt=0.0, le=10.0) = 0.02
+    duration: Real(unit="s", gt=0.0, le=1000.0) = 4.0
+    output_interval: Real(unit="s", gt=0.0, le=10.0) = 0.02
     # Set: duration is an upper bound and the flow ends once the deposit is at rest (give `after`
     # > 0: the bricks are at rest in the box at the opening).
     stop_at_rest: RestStop | None = None
+    # Record every contact of the flow at each frame (results.h5 /contacts; the report then draws the
+    # deposit's force chains). Opt-in: it multiplies the output.
+    record_contacts: bool = False
 
 
 class AvalancheStudy(Strict):
@@ -237,7 +240,7 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
     walls = study.geometry.build().walls(trap_closed=False, wall_height=height)
     extra = {"initial_state": str(state_file.resolve())} if state_file is not None else {}
     return _case(study, study.name, study.release.duration, study.release.output_interval, study.release.stop_at_rest,
-                 _contacts(study.contacts), clumps, walls, **extra)
+                 _contacts(study.contacts), clumps, walls, record_contacts=study.release.record_contacts, **extra)
 
 
 def packing_key(study: AvalancheStudy) -> str:

@@ -48,24 +48,24 @@ BED_OVERLAP = 0.01
 
 
 class ColumnSpec(Strict):
-    length: Real(gt=0.0, le=10.0) = 0.10  # R0, m
-    height: Real(gt=0.0, le=10.0) = 0.07  # H0, m
-    width: Real(gt=0.0, le=10.0) = 0.008  # W, m: the channel width (3D only); the study's reduced 3D set-up
+    length: Real(unit="m", gt=0.0, le=10.0) = 0.10  # R0, m
+    height: Real(unit="m", gt=0.0, le=10.0) = 0.07  # H0, m
+    width: Real(unit="m", gt=0.0, le=10.0) = 0.008  # W, m: the channel width (3D only); the study's reduced 3D set-up
 
 
 class ChannelSpec(Strict):
-    slope_deg: Real(ge=0.0, le=45.0) = 22.0
-    length: Real(gt=0.0, le=100.0) = 0.6  # m downstream of the gate; an end wall closes it
+    slope_deg: Real(unit="°", ge=0.0, le=45.0) = 22.0
+    length: Real(unit="m", gt=0.0, le=100.0) = 0.6  # m downstream of the gate; an end wall closes it
 
 
 class GrainSpec(Strict):
-    diameter: Real(gt=0.0, le=1.0) = 0.002  # mean, m
-    polydispersity: Real(ge=0.0, le=0.5) = 0.1  # diameters uniform in d (1 ± p)
-    density: Real(gt=0.0, le=1e5) = 2500.0
+    diameter: Real(unit="m", gt=0.0, le=1.0) = 0.002  # mean, m
+    polydispersity: Real(unit="1", ge=0.0, le=0.5) = 0.1  # diameters uniform in d (1 ± p)
+    density: Real(unit="kg/m³", gt=0.0, le=1e5) = 2500.0
 
 
 class BedSpec(Strict):
-    erodible_thickness: Real(ge=0.0, le=1.0) = 0.0  # h_i, m, above the rough layer
+    erodible_thickness: Real(unit="m", ge=0.0, le=1.0) = 0.0  # h_i, m, above the rough layer
     # The glued layer (3D): "rows" of touching grains (the calibrated default: every figure in the
     # docs/studies/collapse.md), or "random", a dense random monolayer like glued beads, without the straight gutters
     # between rows that grains roll down (see `rough_bed`).
@@ -77,21 +77,21 @@ class CollapseContacts(Strict):
 
     # Grain/grain, also grain/glued grain. 0.3: the study's 3D value, and what the horizontal
     # calibration finds for the default 3D column (ΔL/L0 = 0.86 against 1.2 a = 0.84).
-    mu: Real(ge=0.0, le=10.0) = 0.3
-    mu_wall: Real(ge=0.0, le=10.0) | None = None  # grain/wall (base plane, side and end walls); None: = mu
-    en2: Real(gt=0.0, le=1.0) = 0.25
-    kn: Real(gt=0.0, le=1e12) = 1000.0  # N/m: overlaps ≈ 0.1 % of d at rest in the 7 cm column, ≈ 4 % in 1 m/s impacts
-    kt_over_kn: Real(ge=0.0, le=10.0) = 0.4
+    mu: Real(unit="1", ge=0.0, le=10.0) = 0.3
+    mu_wall: Real(unit="1", ge=0.0, le=10.0) | None = None  # grain/wall (base plane, side and end walls); None: = mu
+    en2: Real(unit="1", gt=0.0, le=1.0) = 0.25
+    kn: Real(unit="N/m", gt=0.0, le=1e12) = 1000.0  # N/m: overlaps ≈ 0.1 % of d at rest in the 7 cm column, ≈ 4 % in 1 m/s impacts
+    kt_over_kn: Real(unit="1", ge=0.0, le=10.0) = 0.4
 
 
 class PreparationSpec(Strict):
-    mu: Real(ge=0.0, le=10.0) = 0.0  # 0: compact column, 0.3: loose (as in the study)
-    settle_time: Real(gt=0.0, le=100.0) = 0.4
+    mu: Real(unit="1", ge=0.0, le=10.0) = 0.0  # 0: compact column, 0.3: loose (as in the study)
+    settle_time: Real(unit="s", gt=0.0, le=100.0) = 0.4
 
 
 class CollapseRelease(Strict):
-    duration: Real(gt=0.0, le=1000.0) = 2.0
-    output_interval: Real(gt=0.0, le=10.0) = 0.01
+    duration: Real(unit="s", gt=0.0, le=1000.0) = 2.0
+    output_interval: Real(unit="s", gt=0.0, le=10.0) = 0.01
 
 
 class CollapseStudy(StudyEngineSections, Strict):
@@ -113,7 +113,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     release: CollapseRelease = CollapseRelease()
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
     # default runout by less than the grain size (see docs/studies/collapse.md).
-    time_safety_factor: Real(gt=0.0, le=0.5) = 0.05
+    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) = 0.05
     # The sections one engine reads (its solver, the step of an implicit engine) come from StudyEngineSections.
 
     @model_validator(mode="after")

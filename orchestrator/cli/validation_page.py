@@ -1,0 +1,55 @@
+"""`demorch validation`: record the validation runs and write the validation page from the record."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+
+import click
+
+from orchestrator.cli.common import EXIT_ENGINE, REPO_ROOT, console, fail
+from orchestrator.engines import ENGINE_NAMES, EngineError, engines_with, get_adapter
+
+DEFAULT_RECORD = REPO_ROOT / "docs" / "validation" / "record.json"
+DEFAULT_PAGE = REPO_ROOT / "docs" / "validation.md"
+
+
+@click.command("validation")
+@click.option("--engine", "-e", "engines", type=click.Choice(ENGINE_NAMES), multiple=True,
+              help="Engines to measure (repeatable; default: every installed engine that runs clumps).")
+@click.option("--demo", is_flag=True, help="Also run the demo avalanche with three seeds per engine (2–6 minutes each).")
+@click.option("--page-only", is_flag=True, help="Run nothing: write the page from the existing record.")
+@click.option("--record", "record_path", type=click.Path(dir_okay=False, path_type=Path), default=DEFAULT_RECORD, show_default=True,
+              help="The record of measurements (JSON).")
+@click.option("--page", type=click.Path(dir_okay=False, path_type=Path), default=DEFAULT_PAGE, show_default=True,
+              help="The Markdown page; its figures go into a folder named like the record's.")
+@click.option("--workdir", type=click.Path(file_okay=False, path_type=Path), help="Keep the runs here (default: a temporary directory).")
+def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_path: Path, page: Path, workdir: Path | None) -> None:
+    """Run the single-brick drops of the 2012 study (about a minute per engine; with --demo, the demo
+    avalanche too) against their references, record the measurements, and write the validation page."""
+    from orchestrator.studies import validation_page as pages
+
+    if page_only:
+        try:
+            record = json.loads(record_path.read_text())
+        except (OSError, ValueError) as error:
+            fail(f"--record: cannot read {record_path} ({error})")
+    else:
+        wanted = engines or engines_with(clumps=True)
+        versions = {name: get_adapter(name).info() for name in wanted}
+        missing = [name for name, info in versions.items() if not info.executable]
+        if missing:
+            fail(f"--engine: {', '.join(missing)} not installed (`demorch doctor` says what is missing)")
+        try:
+            with tempfile.TemporaryDirectory(prefix="demorch-validation-") as scratch:
+                record = pages.record_runs({name: info.version or "" for name, info in versions.items()}, workdir or Path(scratch),
+                                           demo=demo, progress=lambda stage: console.print(stage))
+        except EngineError as error:
+            fail(str(error), code=EXIT_ENGINE)
+        record_path.parent.mkdir(parents=True, exist_ok=True)
+        record_path.write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
+        console.print(f"record: {record_path}")
+    figures = record_path.parent
+    page.write_text(pages.render_page(record, figures, figures_link=str(figures.relative_to(page.parent.resolve()) if figures.is_relative_to(page.parent.resolve()) else figures)))
+    console.print(f"page: {page}")
