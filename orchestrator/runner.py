@@ -1,7 +1,10 @@
 """One run: validate → write the deck → execute the engine → collect results.h5 → run.json.
 
 run.json is rewritten at each stage (atomically), so a run directory always says how far it got.
-Nothing in it is ever deleted: a failed run keeps its deck, its log and whatever frames it wrote.
+A failed run keeps its deck, its log and whatever frames it wrote. A run whose process was killed
+(its record still says `running`) continues from its newest checkpoint when it is run again, in a
+new segment (engines.checkpoint); its record lists the segments and the simulated time lost. A
+completed run's checkpoints are deleted (its results hold everything).
 `ensure_run` makes a run once under a content address (its run id) and reuses it afterwards:
 settled packings, prepared columns.
 """
@@ -14,11 +17,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from orchestrator import __version__, preflight, rundir
+from orchestrator import __version__, physics, preflight, rundir
 from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
 from orchestrator.engines import common
-from orchestrator.engines.base import ProgressCallback
+from orchestrator.engines import checkpoint
+from orchestrator.engines.base import LOG_NAME, ProgressCallback
+from orchestrator.engines.checkpoint import Resume
 from orchestrator.post import summary
 from orchestrator.results import Trajectory, write_results
 
@@ -53,25 +58,62 @@ def run_case(
         return run_locked(case, case_dir, directory, progress, timeout, adapter or get_adapter(case.engine.value, options))
 
 
+def resume_point(case: Case, directory: Path, adapter: EngineAdapter | None = None, identity: str | None = None) -> Resume | None:
+    """The checkpoint a cut-off run of `case` in `directory` continues from, or None (start afresh).
+
+    A run is cut off when its record says `running` and no process holds the directory's lock (the
+    caller holds it, or checks is_locked). It continues only with the same run id (same inputs and
+    build) and a checkpoint completed before its newest frame.
+    """
+    adapter = adapter or get_adapter(case.engine.value)
+    previous = rundir.read_json(directory / RUN_RECORD)
+    if adapter.checkpoint_ext is None or not previous or previous.get("status") != "running":
+        return None
+    if previous.get("run_id") != (identity or rundir.run_id(case)):
+        return None
+    found = adapter.usable_checkpoints(case, directory)
+    if not found:
+        return None
+    step, path = found[-1]
+    return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name)
+
+
+def resumable(directory: Path) -> bool:
+    """Whether the run in `directory` (its case.json) would continue from a checkpoint."""
+    try:
+        case = rundir.saved_case(directory)
+    except (OSError, ValueError):
+        return False
+    return resume_point(case, directory) is not None
+
+
 def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCallback | None, timeout: float | None,
                adapter: EngineAdapter | None = None) -> dict[str, Any]:
     """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
     adapter = adapter or get_adapter(case.engine.value)
     preflight.check(case, case_dir)
     build = rundir.build_stamp(case.engine.value)
+    identity = rundir.run_id(case, build)
     directory.mkdir(parents=True, exist_ok=True)
+    resume = resume_point(case, directory, adapter, identity)
+    if resume is None and (directory / RUN_RECORD).exists():
+        rundir.retire(directory, directory.parent)  # an earlier attempt's files: kept in ../attic, never mixed with this one's
+    segments = _segments(case, directory, adapter, resume)
     rundir.save_inputs(directory, case)
-    deck = adapter.write_input(case, case_dir, directory)
+    deck = adapter.write_input(case, case_dir, directory, resume)
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
         "kind": "case",
-        "run_id": rundir.run_id(case, build),
+        "run_id": identity,
         "build": build,
         "engine": build["engine"],
         "engine_version": build["version"],
         "deck": deck.name,
         "status": "running",
-        "started": rundir.now(),
+        "started": segments[0]["started"],
+        "segments": segments,
+        # A cut-off segment reached further than the checkpoint the next one starts from: that is lost.
+        "simulated_time_lost_s": sum(cut["reached_time_s"] - following["from_time_s"] for cut, following in zip(segments, segments[1:])),
         **({"warnings": list(adapter.warnings)} if adapter.warnings else {}),
     }
     record_path = directory / RUN_RECORD
@@ -88,6 +130,9 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     engine_seconds = time.perf_counter() - started
     trajectory.attrs.update(engine=build["engine"], engine_version=build["version"] or "unknown", case_name=case.name)
     write_results(directory / RESULTS, trajectory)
+    if adapter.checkpoint_ext is not None:
+        for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
+            path.unlink()
     record.update(
         status="completed",
         finished=rundir.now(),
@@ -99,6 +144,18 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     )
     rundir.write_json_atomic(record_path, record)
     return record
+
+
+def _segments(case: Case, directory: Path, adapter: EngineAdapter, resume: Resume | None) -> list[dict[str, Any]]:
+    """The run's segments so far, this one last: when each started and, for a continued run, the
+    simulated time it starts from and the one its cut-off predecessor had reached (the difference is lost)."""
+    if resume is None:
+        return [{"segment": 0, "started": rundir.now(), "from_time_s": 0.0}]
+    dt = physics.schedule(case).dt
+    previous = rundir.read_json(directory / RUN_RECORD) or {}
+    segments = list(previous.get("segments") or [{"segment": 0, "started": previous.get("started"), "from_time_s": 0.0}])
+    segments[-1] = {**segments[-1], "reached_time_s": (adapter.last_frame_step(case, directory) or 0) * dt}
+    return segments + [{"segment": resume.segment, "started": rundir.now(), "from_time_s": resume.step * dt}]
 
 
 def check_inside(case: Case, case_dir: Path, trajectory: Trajectory, deck: Path) -> None:
@@ -127,7 +184,8 @@ def ensure_run(
     The directory's lock serialises processes that need the same run (campaign workers, say): the
     first runs it, the others wait and reuse it. A run is reused only when it is completed and
     current (rundir.status) and the state file it must leave (`state_file(directory)`, if any)
-    exists; a failed or interrupted attempt is moved to root/attic. `what` names the run in errors
+    exists; an interrupted attempt with a checkpoint continues from it, any other failed or
+    interrupted attempt is moved to root/attic. `what` names the run in errors
     ("the packing run failed: …").
     """
     directory = root / rundir.run_id(case)
@@ -135,7 +193,7 @@ def ensure_run(
         required = state_file(directory)
         if rundir.status(directory, held=True) == "completed" and (required is None or required.is_file()):
             return directory, True
-        if any(entry.name != rundir.LOCK for entry in directory.iterdir()):
+        if any(entry.name != rundir.LOCK for entry in directory.iterdir()) and resume_point(case, directory) is None:
             rundir.retire(directory, root)
         try:
             run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options))

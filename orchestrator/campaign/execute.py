@@ -25,7 +25,8 @@ from orchestrator.case import Case, CaseError
 from orchestrator.engines import RunOptions, get_adapter
 from orchestrator.engines.base import EngineError, die_with_parent
 from orchestrator.rundir import RUN_RECORD, write_json_atomic
-from orchestrator.runner import RESULTS, run_locked
+from orchestrator.runner import RESULTS, resumable, run_locked
+from orchestrator.studies.base import RELEASE_DIR
 from orchestrator.studies.registry import study_kind
 
 RERUN = ("pending", "incomplete", "stale")  # what a launch runs; failed ones only when asked
@@ -47,11 +48,16 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
             state = rundir.status(path, store.inputs_model(kind), held=True)
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
-            if any(entry.name != rundir.LOCK for entry in path.iterdir()):
+            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, kind):
                 rundir.retire(path, path.parent.parent)
             return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options)
     except rundir.Busy:
         return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
+
+
+def _continues(path: Path, kind: str) -> bool:
+    """A point cut off mid-run that goes on from its checkpoint (a study point: its release's)."""
+    return resumable(path if kind == "case" else path / RELEASE_DIR)
 
 
 def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float,
@@ -187,9 +193,13 @@ def dask_results(plan: Plan, jobs: int, address: str | None = None) -> Iterator[
     cluster = None if address else LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
     client = Client(address or cluster)
     try:
-        submitted = [client.submit(perform, *_arguments(plan, identifier), pure=False, key=f"run-{identifier}") for identifier in plan.to_run]
+        submitted = {client.submit(perform, *_arguments(plan, identifier), pure=False, key=f"run-{identifier}"): identifier
+                     for identifier in plan.to_run}
         for future in as_completed(submitted):
-            yield future.result()
+            try:
+                yield future.result()
+            except Exception as error:  # its workers died too often (KilledWorker): the point stays for a relaunch
+                yield {"run_id": submitted[future], "status": "failed", "error": f"{type(error).__name__}: {error}"}
     finally:
         client.close()
         if cluster is not None:

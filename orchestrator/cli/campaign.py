@@ -28,6 +28,44 @@ def campaign() -> None:
 @click.option("--rerun-failed", is_flag=True, help="Run failed runs again (their attempt moves to the attic).")
 def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, executor: str, dask_address: str | None, rerun_failed: bool) -> None:
     """Run every pending point of CAMPAIGN_FILE; completed runs are skipped, so relaunching resumes."""
+    _launch(campaign_file, output, jobs, executor, dask_address, rerun_failed)
+
+
+@campaign.command("slurm")
+@click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Campaign directory, on a file system the nodes share (default runs/campaigns/NAME).")
+@click.option("--walltime", required=True, help="Each job's wall-time limit, [D-]HH:MM:SS; a run cut off at a job's end continues in the next job from its checkpoint.")
+@click.option("--jobs", "-j", type=click.IntRange(1, 10_000), required=True, help="Jobs queued or running at once (one run each).")
+@click.option("--processes", type=click.IntRange(1, 256), default=1, show_default=True, help="CPUs per job: the MPI processes of a run (LIGGGHTS).")
+@click.option("--memory", default="4GB", show_default=True, help="Memory per job.")
+@click.option("--partition", help="SLURM partition (-p).")
+@click.option("--account", help="SLURM account (-A).")
+@click.option("--directive", "directives", multiple=True, help="More #SBATCH directives, e.g. --directive=--exclusive (repeatable).")
+@click.option("--max-cuts", type=click.IntRange(1, 100_000), default=100, show_default=True, help="Times a run may be cut off by a job's end before it counts as failed.")
+@click.option("--dry-run", is_flag=True, help="Print the job script and submit nothing.")
+@click.option("--rerun-failed", is_flag=True, help="Run failed runs again (their attempt moves to the attic).")
+@click.pass_context
+def campaign_slurm(context: click.Context, campaign_file: Path, output: Path | None, walltime: str, jobs: int, processes: int, memory: str,
+                   partition: str | None, account: str | None, directives: tuple[str, ...], max_cuts: int, dry_run: bool, rerun_failed: bool) -> None:
+    """Run CAMPAIGN_FILE on SLURM through dask-jobqueue: JOBS jobs at a time, each one worker running one
+    run; the scheduler runs here (keep this command alive, e.g. in tmux on the login node). Set the
+    checkpoint interval with `demorch --checkpoint-interval S campaign slurm …`."""
+    from orchestrator.campaign.slurm import SlurmJobs, job_script, start_cluster
+
+    spec = SlurmJobs(walltime, jobs, processes, memory, partition, account, directives, run_options().checkpoint_interval, max_cuts)
+    try:
+        spec.seconds()
+    except CaseError as error:
+        fail(str(error))
+    if dry_run:
+        click.echo(job_script(spec))
+        return
+    with start_cluster(spec) as cluster:
+        console.print(f"SLURM jobs: {jobs} × {processes} CPUs, {walltime} each; scheduler {cluster.scheduler_address}")
+        _launch(campaign_file, output, jobs, "dask", cluster.scheduler_address, rerun_failed)
+
+
+def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor: str, dask_address: str | None, rerun_failed: bool) -> None:
     import os
 
     from orchestrator.campaign.execute import run_campaign

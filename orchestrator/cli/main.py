@@ -26,13 +26,15 @@ from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
 from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
-from orchestrator.engines.options import MPI_ENV, RunOptions
+from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
 from orchestrator import preflight
 from orchestrator.post import summary as metrics
 from orchestrator.results import read_results
 from orchestrator.rundir import read_json
 from orchestrator.validation import bounded
-from orchestrator.runner import RESULTS, render_case, run_case
+from orchestrator.runner import RESULTS, render_case, resume_point, run_case
+from orchestrator.rundir import is_locked as rundir_lock_held
+from orchestrator import physics
 
 
 def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
@@ -42,6 +44,10 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        resume = None if rundir_lock_held(rundir) else resume_point(case, rundir)
+        if resume is not None:
+            console.print(f"{rundir}: resuming from the checkpoint at t = {resume.step * physics.schedule(case).dt:.4g} s "
+                          f"(segment {resume.segment}; the run was cut off)")
         with Progress(
             TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
             BarColumn(),
@@ -64,15 +70,25 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
     return record
 
 
+def _interval(value: str | None) -> float | None:
+    try:
+        return None if value is None else check_interval(value, "--checkpoint-interval")
+    except CaseError as error:
+        raise click.BadParameter(str(error).split(": ", 1)[1]) from None
+
+
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="dem-orchestrator")
 @click.option("--mpi", type=click.IntRange(1, 256), default=None, metavar="N",
               help=f"Run each engine that can split a run over MPI (LIGGGHTS) as `mpirun -np N` (default: ${MPI_ENV}, else 1; "
                    "cases and results do not change).")
+@click.option("--checkpoint-interval", default=None, metavar="SECONDS", callback=lambda context, parameter, value: _interval(value),
+              help=f"Simulated seconds between checkpoints of each run, 0 for none (default: ${CHECKPOINT_ENV}, else a tenth of the run). "
+                   "A run cut off mid-way continues from its last checkpoint when run again.")
 @click.pass_context
-def main(context: click.Context, mpi: int | None) -> None:
+def main(context: click.Context, mpi: int | None, checkpoint_interval: float | None) -> None:
     """Run LIGGGHTS, YADE and cocd from one validated case file."""
-    context.obj = RunOptions(mpi_processes=mpi)
+    context.obj = RunOptions(mpi_processes=mpi, checkpoint_interval=checkpoint_interval)
 
 
 @main.command()

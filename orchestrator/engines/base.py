@@ -19,7 +19,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from orchestrator.case import Case
+    from orchestrator.engines.checkpoint import Resume
     from orchestrator.engines.options import RunOptions
+    from orchestrator.physics import Schedule
 from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
@@ -76,24 +78,66 @@ class EngineAdapter(Protocol):
         or runner program (`inputs`), a compiled plugin (`plugin`). Part of every run id."""
         ...
 
-    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
-        """Render the deck (and its data files) into rundir; return the deck path."""
+    # The engine's checkpoint files are checkpoint.<step>.<ext> (engines.checkpoint); None: it writes none.
+    checkpoint_ext: str | None
+
+    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
+        """Render the deck (and its data files) into rundir; return the deck path. resume: continue a
+        cut-off run from that checkpoint (the deck of a new segment)."""
         ...
 
-    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None: ...
+    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        """Run the deck of the last write_input; its log is that segment's."""
+        ...
 
-    def read_output(self, case: Case, rundir: Path) -> Trajectory: ...
+    def read_output(self, case: Case, rundir: Path) -> Trajectory:
+        """Every frame of every segment, once (engines.checkpoint.merge)."""
+        ...
+
+    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
+        """The step of the newest frame written by any segment (None: none yet)."""
+        ...
+
+    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
+        """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
+        ...
 
 
 class AdapterDefaults:
-    """What most adapters share: no run options, the templates as build inputs, no warnings."""
+    """What most adapters share: the run options kept for checkpoints, the templates as build inputs,
+    no warnings, one segment until a resume."""
 
     name: str
     warnings: tuple[str, ...] = ()  # an adapter that has some sets its own in write_input
+    checkpoint_ext: str | None = None
+    options: RunOptions | None = None  # None: the defaults (environment, else a checkpoint per tenth of the run)
+    segment: int = 0  # of the last write_input
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "AdapterDefaults":
-        return cls()
+        adapter = cls()
+        adapter.options = options
+        return adapter
+
+    def checkpoint_steps(self, case: Case, plan: Schedule) -> int | None:
+        """Steps between checkpoints for this case (None: none), from the run options."""
+        from orchestrator.engines.options import RunOptions
+
+        if self.checkpoint_ext is None:
+            return None
+        return (self.options or RunOptions()).checkpoint_steps(case.time.duration, plan.dt, plan.output_every, plan.total_steps)
+
+    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
+        """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
+        from orchestrator.engines import checkpoint
+
+        return checkpoint.usable(rundir, self.checkpoint_ext or "", self.last_frame_step(case, rundir))
+
+    def log_name(self) -> str:
+        """The engine log of the current segment: engine.log, engine.1.log, …"""
+        from orchestrator.engines.checkpoint import segment_name
+
+        return segment_name(LOG_NAME, self.segment)
 
     def build_inputs(self) -> dict[str, str]:
         from orchestrator.engines.templating import template_hash
@@ -155,13 +199,14 @@ def run_engine(
     env: dict[str, str] | None = None,
     timeout: float | None = None,
     failure_markers: tuple[str, ...] = ("ERROR",),
+    log_name: str = LOG_NAME,
 ) -> list[str]:
     """Run an engine, streaming its output to engine.log; raise EngineError on any sign of failure.
 
     Failure: non-zero exit, a line starting with one of `failure_markers`, or a progress value
     that is not finite. Returns the log tail for callers that check more (lost bodies, say).
     """
-    log_path = rundir / LOG_NAME
+    log_path = rundir / log_name
     scan = _LogScan(failure_markers, parse_progress, progress, end_time)
     timed_out = threading.Event()
     with open(log_path, "w", encoding="utf-8") as log:

@@ -87,9 +87,13 @@ def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float | None]
 def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
     """{'stopped_at_rest': time, 'rest_speed': m/s} when the engine ended the run at rest (its log says
     `DEMORCH_AT_REST step N speed v` or `... time t speed v`), else {}. Only the log's tail is read."""
-    log = rundir / "engine.log"
-    if not log.exists():
+    from orchestrator.engines.base import LOG_NAME
+    from orchestrator.engines.checkpoint import segment_files
+
+    logs = segment_files(rundir, LOG_NAME)
+    if not logs:
         return {}
+    log = logs[-1]  # the last segment's
     with log.open("rb") as handle:
         handle.seek(max(0, log.stat().st_size - 65536))
         tail = handle.read().decode("utf-8", "replace").splitlines()
@@ -119,6 +123,25 @@ def read_frames(path: Path) -> tuple[list[float], list[np.ndarray]]:
     return times, rows
 
 
+def read_segment_frames(rundir: Path, name: str, dt: float) -> tuple[list[float], list[np.ndarray]]:
+    """The (time, rows) frames of every segment's stream of `name`, merged (engines.checkpoint.merge):
+    each frame once, a continued run's frames replacing what the cut-off one wrote after its checkpoint."""
+    from orchestrator.engines.checkpoint import merge, segment_files
+
+    pieces = []
+    for path in segment_files(rundir, name):
+        times, rows = read_frames(path)
+        pieces.append(([round(t / dt) for t in times], list(zip(times, rows))))
+    _, frames = merge(pieces)
+    return [t for t, _ in frames], [r for _, r in frames]
+
+
+def last_stream_step(rundir: Path, name: str, dt: float) -> int | None:
+    """The step of the newest frame of the segments' streams of `name` (None: no frame)."""
+    times, _ = read_segment_frames(rundir, name, dt)
+    return round(times[-1] / dt) if times else None
+
+
 def package_version(package: str) -> str | None:
     """The installed version of a Debian package (dpkg-query), or None."""
     try:
@@ -133,7 +156,8 @@ def frame_stream_trajectory(case: Case, rundir: Path, frames_name: str, deck: Pa
     id, mass, radius, position, velocity, angular velocity, orientation (w, x, y, z)."""
     from orchestrator.engines.base import EngineError
 
-    times, rows = read_frames(rundir / frames_name)
+    dt = physics.schedule(case).dt
+    times, rows = read_segment_frames(rundir, frames_name, dt)
     if not rows:
         raise EngineError(f"{engine} wrote no frames", deck, rundir / "engine.log")
     stack = np.stack(rows)
@@ -148,5 +172,5 @@ def frame_stream_trajectory(case: Case, rundir: Path, frames_name: str, deck: Pa
         velocity=stack[:, :, 6:9],
         angular_velocity=stack[:, :, 9:12],
         orientation=stack[:, :, 12:16],
-        attrs={"orientation_tracked": orientation_tracked, **at_rest_attrs(rundir, physics.schedule(case).dt)},
+        attrs={"orientation_tracked": orientation_tracked, **at_rest_attrs(rundir, dt)},
     )

@@ -80,7 +80,9 @@ def flat_phases(position: np.ndarray, velocity: np.ndarray, min_points: int = 3)
 
     def line(i: int, j: int) -> tuple[float, float]:
         """Slope of the least-squares line through points i..j-1 and its squared error."""
-        slope, intercept = np.polyfit(x[i:j], v[i:j], 1) if np.ptp(x[i:j]) > 0 else (0.0, float(np.mean(v[i:j])))
+        # A front that moves less than a micron over the stretch is standing: no slope to fit (and
+        # polyfit would warn that the fit is poorly conditioned).
+        slope, intercept = np.polyfit(x[i:j], v[i:j], 1) if np.ptp(x[i:j]) > 1e-6 else (0.0, float(np.mean(v[i:j])))
         return float(slope), float(np.sum((slope * x[i:j] + intercept - v[i:j]) ** 2))
 
     best = None

@@ -242,8 +242,8 @@ def _plot_demo(record: dict[str, Any], reference: dict[str, Any], engines: list[
         ax.plot([low / mid, high / mid], [0, 0], color="k", lw=6, alpha=0.3)
         for row, engine in enumerate(engines, start=1):
             values = np.array([run["deposit"][key] for run in record["demo"][engine]]) / mid
-            ax.plot(values, np.full(len(values), row), "o", ms=4)
-            ax.plot([values.min(), values.max()], [row, row], lw=1.5)
+            ax.plot(values, np.full(len(values), row), "o", ms=4, color=f"C{row}")
+            ax.plot([values.min(), values.max()], [row, row], lw=1.5, color=f"C{row}")
         ax.axvspan(low / mid, high / mid, color="0.9", zorder=0)
         ax.set_title(label, fontsize=9)
         ax.set_yticks(range(len(rows)), rows)

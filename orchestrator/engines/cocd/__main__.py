@@ -1,13 +1,17 @@
 """Run a COCD deck: `python -m orchestrator.engines.cocd deck.json` in the run directory.
 
-Writes frames.npy (the YADE adapter's frame stream: time, then an (N, 16) array per frame),
-cocd_stats.json (per step: contacts, solver iterations and seconds; the smallest gap seen), and
-prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end.
+Writes the deck's frame stream (frames.npy, the YADE adapter's format: time, then an (N, 16) array
+per frame), cocd_stats.json (per step: contacts, solver iterations and seconds; the smallest gap
+seen), and prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end. With the
+deck's `checkpoint_every`, the scene's arrays are saved every so many steps as
+checkpoint.<step>.npz (the two newest kept); with `resume`, the run continues from such a file.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -69,19 +73,48 @@ def at_rest(scene: Scene, rest: dict | None, n: int) -> bool:
     return True
 
 
+CHECKPOINT = re.compile(r"^checkpoint\.(\d+)\.npz$")
+
+
+def save_checkpoint(scene: Scene, n: int, stats: dict) -> None:
+    """The arrays that change, through a temporary file (a cut-off save never takes the name)."""
+    with open("checkpoint.saving.npz", "wb") as handle:
+        np.savez(handle, step=n, position=scene.position, velocity=scene.velocity, spin=scene.spin, active=scene.walls.active,
+                 stats=json.dumps(stats))
+    os.replace("checkpoint.saving.npz", f"checkpoint.{n}.npz")
+    steps = sorted(int(m.group(1)) for m in (CHECKPOINT.match(name) for name in os.listdir(".")) if m)
+    for old in steps[:-2]:
+        os.remove(f"checkpoint.{old}.npz")
+    print(f"DEMORCH_CHECKPOINT step {n}", flush=True)
+
+
+def load_checkpoint(scene: Scene, path: str) -> tuple[int, dict]:
+    saved = np.load(path, allow_pickle=False)
+    scene.position, scene.velocity, scene.spin = saved["position"].copy(), saved["velocity"].copy(), saved["spin"].copy()
+    scene.walls.active = saved["active"].copy()
+    print(f"DEMORCH_RESUMED step {int(saved['step'])}", flush=True)
+    return int(saved["step"]), json.loads(str(saved["stats"]))
+
+
 def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
+    checkpoint_every = deck.get("checkpoint_every")
     dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
     removals: dict[int, list[int]] = {}
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
             removals.setdefault(int(wall["remove_step"]), []).append(k)
     stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
+    first = 1
+    if deck.get("resume"):
+        done, stats = load_checkpoint(scene, deck["resume"])
+        first = done + 1
     started = time.perf_counter()
     with open(deck["frames"], "wb") as frames:
-        write_frame(frames, scene, 0.0)
-        for n in range(1, total + 1):
+        if first == 1:
+            write_frame(frames, scene, 0.0)
+        for n in range(first, total + 1):
             for k in removals.get(n - 1, []):
                 scene.walls.active[k] = False
             result = step(scene, dt, deck["solver"], deck["tolerance"])
@@ -102,6 +135,8 @@ def main(deck_path: str) -> None:
                 if at_rest(scene, deck.get("rest"), n):
                     total = n
                     break
+            if checkpoint_every and n % checkpoint_every == 0 and n < total:
+                save_checkpoint(scene, n, stats)
     stats["wall_s"] = time.perf_counter() - started
     Path("cocd_stats.json").write_text(json.dumps(stats) + "\n")
     print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed-and-redone {stats['missed']} unresolved {stats['unresolved']}")

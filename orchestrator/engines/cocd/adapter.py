@@ -20,6 +20,7 @@ from orchestrator import physics
 from orchestrator.case import Case, CaseError, RectangleWall
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
+from orchestrator.engines.checkpoint import Resume, segment_name
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, run_engine
 
 DECK_NAME = "cocd.json"
@@ -38,6 +39,7 @@ def _progress(line: str) -> float | None:
 
 class CocdAdapter(AdapterDefaults):
     name = "cocd"
+    checkpoint_ext = "npz"  # checkpoint.<step>.npz: the scene's arrays
 
     def info(self) -> EngineInfo:
         try:
@@ -46,7 +48,8 @@ class CocdAdapter(AdapterDefaults):
             version = None
         return EngineInfo(name="cocd", executable=sys.executable, version=version, install_hint=INSTALL_HINT)
 
-    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
+        self.segment = resume.segment if resume else 0
         walls = []
         for i, wall in enumerate(case.walls):
             if not isinstance(wall, RectangleWall):
@@ -84,23 +87,28 @@ class CocdAdapter(AdapterDefaults):
             "mu": mu.tolist(),
             "walls": walls,
             "bodies": bodies,
-            "frames": FRAMES_NAME,
+            "frames": segment_name(FRAMES_NAME, self.segment),
             "rest": common.rest_settings(case, plan),
+            "checkpoint_every": self.checkpoint_steps(case, plan),
+            "resume": resume.file if resume else None,
         }
-        path = rundir / DECK_NAME
+        path = rundir / segment_name(DECK_NAME, self.segment)
         path.write_text(json.dumps(deck) + "\n")  # data only: the runner is fixed code
         return path
 
     def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
-        deck = rundir / DECK_NAME
+        deck = rundir / segment_name(DECK_NAME, self.segment)
         end_time = physics.schedule(case).end_time
-        command = [sys.executable, "-u", "-m", "orchestrator.engines.cocd", DECK_NAME]
+        command = [sys.executable, "-u", "-m", "orchestrator.engines.cocd", deck.name]
         env = dict(os.environ)
         env["PYTHONPATH"] = str(Path(__file__).resolve().parents[3]) + (":" + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         tail = run_engine(command, rundir, deck, _progress, end_time, progress, env=env, timeout=timeout,
-                          failure_markers=("ERROR", "Traceback"))
+                          failure_markers=("ERROR", "Traceback"), log_name=self.log_name())
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
-            raise EngineError("cocd ended without finishing", deck, rundir / "engine.log", tail)
+            raise EngineError("cocd ended without finishing", deck, rundir / self.log_name(), tail)
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
         return common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / DECK_NAME, "cocd", orientation_tracked=False)
+
+    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
+        return common.last_stream_step(rundir, FRAMES_NAME, physics.schedule(case).dt)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 
@@ -10,9 +11,11 @@ import numpy as np
 from orchestrator import geometry, physics
 from orchestrator.case import Case, Domain
 from orchestrator.engines import common
+from orchestrator.engines.checkpoint import Resume, segment_name
 from orchestrator.engines.templating import render
 
 DECK_NAME = "in.liggghts"
+CHECKPOINT_EXT = "restart"  # checkpoint.<step>.restart: LIGGGHTS restart files (atoms, clumps, contact history)
 DATA_NAME = "data.spheres"
 DUMP_NAME = "frames.bin"  # binary `dump custom` (LIGGGHTS writes binary when the name ends in .bin)
 TEXT_DUMP_NAME = "frames.dump"  # runs made before the binary dump; still read
@@ -143,44 +146,53 @@ def link_initial_state(source: Path, target: Path) -> None:
     shutil.copyfile(source, target)
 
 
-def run_segments(case: Case, plan: physics.Schedule) -> list[dict[str, object]]:
-    """Consecutive `run` lengths, each followed by the walls removed at its end."""
+def run_segments(case: Case, plan: physics.Schedule, start: int = 0) -> list[dict[str, object]]:
+    """Consecutive `run`s up to each wall removal step (`end`), each followed by the walls removed
+    then, from step `start` on (a continued run: the removals due at or before its checkpoint are
+    done already, walls_at)."""
     removals = physics.removal_steps(case, plan)
     remaining = [wall.name for wall in case.walls]
     segments, done = [], 0
     for step in sorted(set(removals.values())):
         removed = [name for name, at in removals.items() if at == step]
         remaining = [name for name in remaining if name not in removed]
-        segments.append({"steps": step - done, "end": step, "remove": removed, "remaining": remaining})
+        segments.append({"steps": step - max(done, start), "end": step, "remove": removed, "remaining": remaining})
         done = step
-    segments.append({"steps": plan.total_steps - done, "end": plan.total_steps, "remove": [], "remaining": remaining})
-    return segments
+    segments.append({"steps": plan.total_steps - max(done, start), "end": plan.total_steps, "remove": [], "remaining": remaining})
+    return [segment for segment in segments if segment["end"] > start or segment["end"] == plan.total_steps]
+
+
+def walls_at(case: Case, plan: physics.Schedule, step: int) -> list[str]:
+    """The walls a run from `step` starts with: those not removed at or before it (a continued run
+    starts with the removals due at its checkpoint done)."""
+    removals = physics.removal_steps(case, plan)
+    return [wall.name for wall in case.walls if step == 0 or removals.get(wall.name, step + 1) > step]
 
 
 def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) -> dict[str, object] | None:
     """The deck's stop-at-rest runs over the last segment: up to the first check, whole chunks between
-    checks, then the remainder to the end (None: one `run`)."""
+    checks, then the remainder to the end (None: one `run`). A continued run's last segment starts at
+    its checkpoint, and its first check is the next one due (checks stay where they were)."""
     rest = common.rest_settings(case, plan)
     if rest is None:
         return None
-    start = plan.total_steps - last_segment_steps  # the last segment starts at the last wall removal
-    first = min(max(0, rest["first"] - start), last_segment_steps)  # steps from there to the first check
+    start = plan.total_steps - last_segment_steps  # the last segment starts at the last wall removal (or the checkpoint)
+    due = rest["first"] if start <= rest["first"] else rest["first"] + math.ceil((start - rest["first"]) / rest["every"]) * rest["every"]
+    first = min(due - start, last_segment_steps)  # steps from there to the first check
     chunks, remainder = divmod(last_segment_steps - first, rest["every"])
     return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "speed_squared": float(rest["speed"]) ** 2}
 
 
 def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "* * *", max_bins: float = MAX_BINS,
-               skin_radii: float = SKIN_RADII) -> Path:
-    """The data file, wall meshes and deck of `case` in rundir; returns the deck path."""
+               skin_radii: float = SKIN_RADII, checkpoint_every: int | None = None, resume: Resume | None = None) -> Path:
+    """The data file, wall meshes and deck of `case` in rundir; returns the deck path.
+
+    checkpoint_every: steps between checkpoint files (None: none). resume: continue from that
+    checkpoint (a deck of its own, in.<segment>.liggghts, writing its own frame files)."""
     prepared = common.prepare(case, case_dir)
     types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
-    mesh_dir = rundir / "meshes"
-    mesh_dir.mkdir(exist_ok=True)
-    walls = []
-    for wall, triangles in zip(case.walls, prepared.wall_triangles):
-        stl = mesh_dir / f"{wall.name}.stl"
-        geometry.write_ascii_stl(stl, triangles)
-        walls.append({"name": wall.name, "stl": f"meshes/{stl.name}", "type": types[wall.material]})
+    start = resume.step if resume else 0
+    walls = write_meshes(case, prepared, types, rundir, walls_at(case, prepared.schedule, start))
     write_data(case, prepared, types, rundir / DATA_NAME)
     if case.initial_state:
         link_initial_state(case_dir / case.initial_state, rundir / INITIAL_STATE_NAME)
@@ -189,7 +201,8 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
     direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
     fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
     glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
-    segments = run_segments(case, prepared.schedule)
+    segments = run_segments(case, prepared.schedule, start)
+    segment = resume.segment if resume else 0
     radius_max = float(max(_sphere_radii(case)))
     skin = skin_radii * radius_max
     context = {
@@ -200,9 +213,13 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "matrix": common.pair_matrices(case, prepared.pairs),
         "law": case.law.value,
         "data_file": DATA_NAME,
-        "dump_file": DUMP_NAME,
+        "dump_file": segment_name(DUMP_NAME, segment),
         "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
-        "contacts": {"pairs": CONTACT_PAIRS_NAME, "walls": CONTACT_WALLS_NAME} if case.record_contacts else None,
+        "contacts": {"pairs": segment_name(CONTACT_PAIRS_NAME, segment), "walls": segment_name(CONTACT_WALLS_NAME, segment)}
+                    if case.record_contacts else None,
+        "checkpoint_every": checkpoint_every,
+        "checkpoint_ext": CHECKPOINT_EXT,
+        "resume": {"file": resume.file, "step": resume.step} if resume else None,
         "skin": skin,
         "binsize": bin_size(prepared.domain, cutoff=2.0 * radius_max + skin, max_bins=max_bins),
         "dt": prepared.schedule.dt,
@@ -222,9 +239,22 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "save_state": case.save_state,
         "state_file": STATE_NAME,
     }
-    deck = rundir / DECK_NAME
+    deck = rundir / segment_name(DECK_NAME, segment)
     deck.write_text(render("liggghts", "case.in.j2", context))
     return deck
+
+
+def write_meshes(case: Case, prepared: "common.Prepared", types: dict[str, int], rundir: Path, present: list[str]) -> list[dict[str, object]]:
+    """An ASCII STL per wall present (rundir/meshes); the template data of each."""
+    mesh_dir = rundir / "meshes"
+    mesh_dir.mkdir(exist_ok=True)
+    walls = []
+    for wall, triangles in zip(case.walls, prepared.wall_triangles):
+        if wall.name in present:
+            stl = mesh_dir / f"{wall.name}.stl"
+            geometry.write_ascii_stl(stl, triangles)
+            walls.append({"name": wall.name, "stl": f"meshes/{stl.name}", "type": types[wall.material]})
+    return walls
 
 
 def write_data(case: Case, prepared: "common.Prepared", types: dict[str, int], path: Path) -> None:

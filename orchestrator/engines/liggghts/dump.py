@@ -127,6 +127,41 @@ def read_dump(path: Path) -> tuple[list[int], list[str], list[np.ndarray]]:
     return steps, columns, frames
 
 
+def binary_dump_steps(path: Path, n_columns: int) -> list[int]:
+    """The steps of the complete frames of a binary `dump custom` file, reading only their headers
+    (layout: read_binary_dump)."""
+    steps: list[int] = []
+    if not path.exists():
+        return steps
+    end = path.stat().st_size
+    with open(path, "rb") as stream:
+        offset = 0
+        while offset + 60 <= end:
+            stream.seek(offset)
+            head = stream.read(20)
+            step, atoms = (int(v) for v in np.frombuffer(head, np.int64, 2))
+            triclinic = int(np.frombuffer(head, np.int32, 1, 16)[0])
+            offset += 16 + 4 + 24 + 48 + (24 if triclinic else 0)
+            stream.seek(offset)
+            size_one, chunks = (int(v) for v in np.frombuffer(stream.read(8), np.int32, 2))
+            offset += 8
+            if size_one != n_columns:
+                raise ValueError(f"{path}: {size_one} values per atom, expected {n_columns}")
+            values = 0
+            for _ in range(chunks):
+                stream.seek(offset)
+                raw = stream.read(4)
+                if len(raw) < 4:
+                    return steps
+                count = int(np.frombuffer(raw, np.int32, 1)[0])
+                offset += 4 + 8 * count
+                values += count
+            if offset > end or values != atoms * size_one:
+                return steps  # a frame cut short by a crash
+            steps.append(step)
+    return steps
+
+
 def read_binary_dump(path: Path, n_columns: int) -> tuple[list[int], list[np.ndarray]]:
     """Parse a binary `dump custom` file into (steps, per-frame (atoms, columns) arrays).
 

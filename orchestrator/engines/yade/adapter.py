@@ -19,12 +19,16 @@ from orchestrator.bricks import world_sphere_centres
 from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
+from orchestrator.engines.checkpoint import Resume, segment_name
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 from orchestrator.engines.yade.materials import GLUED, glued_clones, glued_friction, stand_in_scale, yade_materials
 
 SCRIPT_NAME = "script.py"
 FRAMES_NAME = "frames.npy"
-CONTACTS_NAME = "contacts.npy"  # (time, (rows, 12) contacts) per frame, when the case records contacts
+CONTACTS_NAME = "contacts.npy"
+# checkpoint.<step>.yade: the scene saved by O.save, binary and uncompressed (half the time of .gz:
+# 32 against 67 ms for 800 spheres, measured 2026-11-30; 1 MB)
+CHECKPOINT_EXT = "yade"  # (time, (rows, 12) contacts) per frame, when the case records contacts
 INSTALL_HINT = "apt-get install -y yade python3-yade"
 
 _PROGRESS = re.compile(r"^DEMORCH_PROGRESS (\S+) (\S+)$")
@@ -45,6 +49,7 @@ def _blocked_dofs(sphere: Sphere, planar: bool) -> str:
 
 class YadeAdapter(AdapterDefaults):
     name = "yade"
+    checkpoint_ext = CHECKPOINT_EXT
 
     def __init__(self, executable: str = "yade", threads: int = 1):
         self.executable = executable
@@ -56,9 +61,10 @@ class YadeAdapter(AdapterDefaults):
         version = common.package_version("yade") if path else None
         return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
 
-    def write_input(self, case: Case, case_dir: Path, rundir: Path) -> Path:
+    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
         from orchestrator.engines.templating import render
 
+        self.segment = resume.segment if resume else 0
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (docs/engines.md).
         prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
@@ -78,14 +84,6 @@ class YadeAdapter(AdapterDefaults):
              _blocked_dofs(s, case.planar), not s.fixed)
             for s in case.bodies.spheres
         ]
-        clumps = []
-        for c in case.bodies.clumps:
-            brick = case.shape(c.shape).clump(case.material(c.material).density)
-            centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
-            clumps.append(
-                (c.material, [tuple(float(v) for v in p) for p in centres], [float(r) for r in brick.radii], c.position, c.orientation,
-                 c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia))
-            )
         touching = case.touching_pairs()
         friction = [(p.materials[0], p.materials[1], p.mu) for p in pairs if frozenset(p.materials) in touching]
         materials = yade_materials(case, pairs)
@@ -98,40 +96,58 @@ class YadeAdapter(AdapterDefaults):
             "save_state": case.save_state,
             "output_every": prepared.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
-            "frames_file": FRAMES_NAME,
-            "contacts_file": CONTACTS_NAME if case.record_contacts else None,
+            "frames_file": segment_name(FRAMES_NAME, self.segment),
+            "contacts_file": segment_name(CONTACTS_NAME, self.segment) if case.record_contacts else None,
+            "checkpoint_every": self.checkpoint_steps(case, prepared.schedule),
+            "resume": resume.file if resume else None,
             "walls": [wall.name for wall in case.walls],
             "materials": materials + clones,
             "friction": friction,
             "spheres": spheres,
-            "clumps": clumps,
+            "clumps": _clumps(case),
             "facets": facets,
             "boxes": boxes,
             "removals": _removals(case, prepared.schedule),
             "rest": common.rest_settings(case, prepared.schedule),
         }
         context = {"name": case.name, "data": data}
-        script = rundir / SCRIPT_NAME
+        script = rundir / segment_name(SCRIPT_NAME, self.segment)
         script.write_text(render("yade", "case.py.j2", context))
         return script
 
     def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
-        script = rundir / SCRIPT_NAME
+        script = rundir / segment_name(SCRIPT_NAME, self.segment)
         executable = require_executable(self.executable, INSTALL_HINT)
         end_time = physics.schedule(case).end_time
-        command = [executable, f"-j{self.threads}", "-x", "-n", SCRIPT_NAME]
+        command = [executable, f"-j{self.threads}", "-x", "-n", script.name]
         tail = run_engine(
-            command, rundir, script, _progress, end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback")
+            command, rundir, script, _progress, end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback"),
+            log_name=self.log_name(),
         )
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
-            raise EngineError("YADE ended without finishing the script", script, rundir / "engine.log", tail)
+            raise EngineError("YADE ended without finishing the script", script, rundir / self.log_name(), tail)
 
     def read_output(self, case: Case, rundir: Path) -> Trajectory:
         trajectory = common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
         if case.record_contacts:
-            _, rows = common.read_frames(rundir / CONTACTS_NAME)
+            _, rows = common.read_segment_frames(rundir, CONTACTS_NAME, physics.schedule(case).dt)
             trajectory.contacts = Contacts.from_frames(rows[: trajectory.n_frames])
         return trajectory
+
+    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
+        return common.last_stream_step(rundir, FRAMES_NAME, physics.schedule(case).dt)
+
+
+def _clumps(case: Case) -> list[tuple]:
+    """The script's CLUMPS rows: material, sphere centres (world) and radii, centre, orientation,
+    velocity, spin, true mass and principal inertia."""
+    rows = []
+    for c in case.bodies.clumps:
+        brick = case.shape(c.shape).clump(case.material(c.material).density)
+        centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
+        rows.append((c.material, [tuple(float(v) for v in p) for p in centres], [float(r) for r in brick.radii], c.position, c.orientation,
+                     c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia)))
+    return rows
 
 
 def rectangle_box(wall: Wall) -> tuple[str, str, list[float], list[float], list[float]] | None:
