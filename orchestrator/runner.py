@@ -130,9 +130,6 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     engine_seconds = time.perf_counter() - started
     trajectory.attrs.update(engine=build["engine"], engine_version=build["version"] or "unknown", case_name=case.name)
     write_results(directory / RESULTS, trajectory)
-    if adapter.checkpoint_ext is not None:
-        for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
-            path.unlink()
     record.update(
         status="completed",
         finished=rundir.now(),
@@ -143,6 +140,9 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         metrics=summary.summary(trajectory),
     )
     rundir.write_json_atomic(record_path, record)
+    if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
+        for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
+            path.unlink()
     return record
 
 

@@ -119,3 +119,28 @@ def test_build_is_cached_outside_the_clone(tmp_path: Path, monkeypatch: pytest.M
     assert str(first).startswith(str(tmp_path / "cache"))
     assert warm < cold
     print(f"plugin build: cold {cold:.2f} s, warm {warm:.3f} s")
+
+
+@pytest.mark.engine
+@requires_liggghts
+def test_the_compiled_law_is_the_same_whatever_the_neighbour_list_rebuilds(tmp_path: Path) -> None:
+    """Five spheres colliding (pairs meet, part and meet again): LIGGGHTS' own neighbour-list
+    rebuilds and a rebuild at every step give the same run to the bit. A pair's history must be
+    cleared when it parts, not only when the list is rebuilt (before the deck's
+    contact_distance_factor, 0.43 mm apart after 0.6 s)."""
+    from orchestrator.engines import RunOptions, get_adapter
+    from test_checkpoint import colliding_spheres
+
+    case = colliding_spheres("liggghts", "bilinear")
+    runs = []
+    for every_step in (False, True):
+        directory = tmp_path / str(every_step)
+        directory.mkdir()
+        adapter = get_adapter("liggghts", RunOptions(checkpoint_interval=0))
+        deck = adapter.write_input(case, tmp_path, directory)
+        if every_step:
+            deck.write_text(deck.read_text().replace("neigh_modify    delay 0", "neigh_modify    delay 0 every 1 check no", 1))
+        adapter.execute(case, directory)
+        runs.append(adapter.read_output(case, directory))
+    assert "every 1 check no" in deck.read_text()
+    assert np.array_equal(runs[0].position, runs[1].position)

@@ -183,12 +183,13 @@ def test_contacts_validate_against_the_trajectory() -> None:
         recorded.validate(2, 2)
 
 
-def test_liggghts_rows_drop_duplicates_and_a_clumps_own_spheres_and_name_walls_by_case_index() -> None:
+def test_liggghts_rows_drop_duplicates_clumps_own_spheres_and_untouching_pairs_and_name_walls_by_case_index() -> None:
     atom_slot = np.array([-1, 0, 0, 1, 1])  # atoms 1, 2 → body 0; atoms 3, 4 → body 1
     #                  id1 id2 per  force      normal      point
     pairs = np.array([[1, 3, 0, 0, 0, -2, 0, 0, -2, 0, 0, 0.01],
                       [3, 1, 0, 0, 0, 2, 0, 0, 2, 0, 0, 0.01],  # the same pair, from another process
-                      [1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]])  # one clump's own spheres
+                      [1, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0],  # one clump's own spheres
+                      [2, 4, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]])  # close, not touching: no force
     #                  wall point   atom centre  mesh tri atom  force        normal
     walls = np.array([[0, 0, 0, 0, 0, 0.005, 1, 7, 4, 0.5, 0, 3.0, 0, 0, 3.0]])
     rows = contact_rows(pairs, walls, atom_slot, wall_index=[0, 2])

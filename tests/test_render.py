@@ -206,7 +206,7 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None
     large_deck = render_case(large, tmp_path, tmp_path / "large").read_text()
     binsize = (6.0 * 5.0 * 3.5 / MAX_BINS) ** (1.0 / 3.0)  # 1.7 cm: at most MAX_BINS bins
     assert "binsize" not in small_deck
-    assert f"neigh_modify    delay 0 binsize {binsize!r}" in large_deck
+    assert f"neigh_modify    delay 0 contact_distance_factor 1.1 binsize {binsize!r}" in large_deck
     slides = []
     for case, name in ((small, "small"), (large, "large")):
         run_case(case, tmp_path, tmp_path / name)

@@ -229,7 +229,13 @@ def contact_rows(pairs: np.ndarray | None, walls: np.ndarray | None, atom_slot: 
     the deck's pair/gran/local dump (id1 id2 periodic, force, normal force, contact point: force on
     atom 1) and wall/gran/local dump (point on the wall, atom centre, mesh triangle atom, force,
     normal force: force on the atom). atom_slot: atom id → body index; wall_index: mesh → case wall.
-    A pair counted by two MPI processes is kept once; a clump's own spheres never pair."""
+    A pair counted by two MPI processes is kept once; a clump's own spheres never pair. Rows without
+    any force are left out: LIGGGHTS also lists pairs and walls within its contact distance (the
+    deck's contact_distance_factor) that do not touch."""
+    if pairs is not None and len(pairs):
+        pairs = pairs[np.any(pairs[:, 3:6] != 0.0, axis=1)]
+    if walls is not None and len(walls):
+        walls = walls[np.any(walls[:, 9:12] != 0.0, axis=1)]
     out = []
     if pairs is not None and len(pairs):
         ids = pairs[:, 0:2].astype(np.int64)
