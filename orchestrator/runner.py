@@ -71,11 +71,12 @@ def resume_point(case: Case, directory: Path, adapter: EngineAdapter | None = No
         return None
     if previous.get("run_id") != (identity or rundir.run_id(case)):
         return None
-    found = adapter.usable_checkpoints(case, directory)
+    reached = adapter.last_frame_step(case, directory)
+    found = adapter.usable_checkpoints(case, directory, reached)
     if not found:
         return None
     step, path = found[-1]
-    return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name)
+    return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name, reached)
 
 
 def resumable(directory: Path) -> bool:
@@ -98,7 +99,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     resume = resume_point(case, directory, adapter, identity)
     if resume is None and (directory / RUN_RECORD).exists():
         rundir.retire(directory, directory.parent)  # an earlier attempt's files: kept in ../attic, never mixed with this one's
-    segments = _segments(case, directory, adapter, resume)
+    segments = _segments(case, directory, resume)
     rundir.save_inputs(directory, case)
     deck = adapter.write_input(case, case_dir, directory, resume)
     record: dict[str, Any] = {
@@ -146,7 +147,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     return record
 
 
-def _segments(case: Case, directory: Path, adapter: EngineAdapter, resume: Resume | None) -> list[dict[str, Any]]:
+def _segments(case: Case, directory: Path, resume: Resume | None) -> list[dict[str, Any]]:
     """The run's segments so far, this one last: when each started and, for a continued run, the
     simulated time it starts from and the one its cut-off predecessor had reached (the difference is lost)."""
     if resume is None:
@@ -154,7 +155,7 @@ def _segments(case: Case, directory: Path, adapter: EngineAdapter, resume: Resum
     dt = physics.schedule(case).dt
     previous = rundir.read_json(directory / RUN_RECORD) or {}
     segments = list(previous.get("segments") or [{"segment": 0, "started": previous.get("started"), "from_time_s": 0.0}])
-    segments[-1] = {**segments[-1], "reached_time_s": (adapter.last_frame_step(case, directory) or 0) * dt}
+    segments[-1] = {**segments[-1], "reached_time_s": (resume.reached_step or 0) * dt}
     return segments + [{"segment": resume.segment, "started": rundir.now(), "from_time_s": resume.step * dt}]
 
 

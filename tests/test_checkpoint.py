@@ -84,7 +84,7 @@ def test_a_run_continued_from_any_checkpoint_ends_as_the_uninterrupted_one(engin
     kept = checkpoint.usable(tmp_path, adapter.checkpoint_ext, adapter.last_frame_step(case, tmp_path))
     steps = [step for step, _ in kept]
     assert len(steps) == 2 and steps[0] * 2 == steps[1]  # the two newest kept: 0.1 and 0.2 s
-    found = adapter.usable_checkpoints(case, tmp_path)
+    found = adapter.usable_checkpoints(case, tmp_path, adapter.last_frame_step(case, tmp_path))
     assert [step for step, _ in found] == (steps[1:] if engine == "liggghts" else steps)
     for segment, (step, path) in enumerate(found, start=1):
         adapter.write_input(case, tmp_path, tmp_path, Resume(segment, step, path.name))
@@ -254,8 +254,8 @@ class _Adapter:
     def last_frame_step(self, case: Case, rundir: Path) -> int | None:
         return self.last
 
-    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
-        return checkpoint.usable(rundir, self.checkpoint_ext, self.last)
+    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+        return checkpoint.usable(rundir, self.checkpoint_ext, last_frame_step)
 
 
 def _cut_off(directory: Path, case: Case, status: str = "running", run_id: str | None = None) -> None:

@@ -98,8 +98,9 @@ class EngineAdapter(Protocol):
         """The step of the newest frame written by any segment (None: none yet)."""
         ...
 
-    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
-        """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
+    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+        """(step, path) of the checkpoints a cut-off run whose newest frame is at last_frame_step
+        may continue from, oldest first."""
         ...
 
 
@@ -127,11 +128,11 @@ class AdapterDefaults:
             return None
         return (self.options or RunOptions()).checkpoint_steps(case.time.duration, plan.dt, plan.output_every, plan.total_steps)
 
-    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
         from orchestrator.engines import checkpoint
 
-        return checkpoint.usable(rundir, self.checkpoint_ext or "", self.last_frame_step(case, rundir))
+        return checkpoint.usable(rundir, self.checkpoint_ext or "", last_frame_step)
 
     def log_name(self) -> str:
         """The engine log of the current segment: engine.log, engine.1.log, …"""

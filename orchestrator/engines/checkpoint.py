@@ -16,7 +16,7 @@ ones are deleted (`prune`).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence, TypeVar
 
@@ -28,11 +28,12 @@ Frame = TypeVar("Frame")
 @dataclass(frozen=True)
 class Resume:
     """Where a continued run starts: its segment number, the checkpoint's step and file (a name in
-    the run directory)."""
+    the run directory), and the step of the newest frame the cut-off run had written."""
 
     segment: int
     step: int
     file: str
+    reached_step: int | None = field(default=None, compare=False)
 
 
 def segment_name(name: str, segment: int) -> str:
@@ -43,8 +44,8 @@ def segment_name(name: str, segment: int) -> str:
     return f"{stem}.{segment}{dot}{suffix}"
 
 
-def segment_files(rundir: Path, name: str) -> list[Path]:
-    """The existing files of `name` in segment order (a segment that wrote none is skipped)."""
+def _numbered(rundir: Path, name: str) -> list[tuple[int, Path]]:
+    """(segment, path) of the existing files of `name`, in segment order."""
     stem, dot, suffix = name.partition(".")
     pattern = re.compile(rf"^{re.escape(stem)}(?:\.(\d+))?{re.escape(dot + suffix)}$")
     found = []
@@ -52,15 +53,19 @@ def segment_files(rundir: Path, name: str) -> list[Path]:
         match = pattern.match(path.name)
         if match:
             found.append((int(match.group(1) or 0), path))
-    return [path for _, path in sorted(found)]
+    return sorted(found)
+
+
+def segment_files(rundir: Path, name: str) -> list[Path]:
+    """The existing files of `name` in segment order (a segment that wrote none is skipped)."""
+    return [path for _, path in _numbered(rundir, name)]
 
 
 def next_segment(rundir: Path, log_name: str) -> int:
     """The number of the next segment: one past the newest that started (each writes its engine log
     first)."""
-    stem, dot, suffix = log_name.partition(".")
-    numbers = [0 if path.name == log_name else int(path.name[len(stem) + 1:].split(".")[0]) for path in segment_files(rundir, log_name)]
-    return max(numbers) + 1 if numbers else 0
+    numbered = _numbered(rundir, log_name)
+    return numbered[-1][0] + 1 if numbered else 0
 
 
 def merge(pieces: Sequence[tuple[Sequence[int], Sequence[Frame]]]) -> tuple[list[int], list[Frame]]:
@@ -96,10 +101,12 @@ def usable(rundir: Path, ext: str, last_frame_step: int | None) -> list[tuple[in
 
 def prune(rundir: Path, ext: str, last_frame_step: int | None, keep: int = KEEP) -> None:
     """Delete the checkpoints older than the `keep` newest usable ones (a newer one being written
-    stays)."""
-    kept = usable(rundir, ext, last_frame_step)[-keep:]
+    stays). last_frame_step None: every checkpoint counts as complete (an engine that writes them
+    through a temporary name)."""
+    found = checkpoints(rundir, ext)
+    kept = (found if last_frame_step is None else usable(rundir, ext, last_frame_step))[-keep:]
     if not kept:
         return
-    for step, path in checkpoints(rundir, ext):
+    for step, path in found:
         if step < kept[0][0]:
             path.unlink(missing_ok=True)

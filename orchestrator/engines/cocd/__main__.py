@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from orchestrator.engines import checkpoint
 from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
 
 
@@ -73,18 +73,13 @@ def at_rest(scene: Scene, rest: dict | None, n: int) -> bool:
     return True
 
 
-CHECKPOINT = re.compile(r"^checkpoint\.(\d+)\.npz$")
-
-
 def save_checkpoint(scene: Scene, n: int, stats: dict) -> None:
     """The arrays that change, through a temporary file (a cut-off save never takes the name)."""
     with open("checkpoint.saving.npz", "wb") as handle:
         np.savez(handle, step=n, position=scene.position, velocity=scene.velocity, spin=scene.spin, active=scene.walls.active,
                  stats=json.dumps(stats))
     os.replace("checkpoint.saving.npz", f"checkpoint.{n}.npz")
-    steps = sorted(int(m.group(1)) for m in (CHECKPOINT.match(name) for name in os.listdir(".")) if m)
-    for old in steps[:-2]:
-        os.remove(f"checkpoint.{old}.npz")
+    checkpoint.prune(Path("."), "npz", None)
     print(f"DEMORCH_CHECKPOINT step {n}", flush=True)
 
 

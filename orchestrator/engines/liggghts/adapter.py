@@ -187,12 +187,12 @@ class LiggghtsAdapter(AdapterDefaults):
             frames.append(contact_rows(pairs.get(step), walls.get(step), atom_slot, present))
         return Contacts.from_frames(frames)
 
-    def usable_checkpoints(self, case: Case, rundir: Path) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         """Not those at a wall removal step: LIGGGHTS rebuilds its wall fix there, and a run
         continued from that instant departs from the uninterrupted one (measured 2026-11-30: 1e-7 m,
         2.5e-4 m/s on spheres resting on the wall that stays); from any other step it is exact."""
         removals = set(physics.removal_steps(case, physics.schedule(case)).values())
-        return [(step, path) for step, path in super().usable_checkpoints(case, rundir) if step not in removals]
+        return [(step, path) for step, path in super().usable_checkpoints(case, rundir, last_frame_step) if step not in removals]
 
     def last_frame_step(self, case: Case, rundir: Path) -> int | None:
         columns = len(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
