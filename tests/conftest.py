@@ -33,12 +33,12 @@ requires_liggghts = pytest.mark.skipif(shutil.which("liggghts") is None, reason=
 requires_yade = pytest.mark.skipif(shutil.which("yade") is None, reason="YADE not installed (run scripts/setup.sh)")
 
 
-def engine_params() -> list[Any]:
-    """Parametrise a test over both engines, each marked and skipped when absent."""
-    return [
-        pytest.param("liggghts", marks=[pytest.mark.engine, requires_liggghts]),
-        pytest.param("yade", marks=[pytest.mark.engine, requires_yade]),
-    ]
+def engine_params(slow: tuple[str, ...] = ()) -> list[Any]:
+    """Parametrise a test over both engines, each marked and skipped when absent; the engines in
+    `slow` run only with -m slow (the default run's budget: 20 minutes on 2 cores)."""
+    requires = {"liggghts": requires_liggghts, "yade": requires_yade}
+    return [pytest.param(name, marks=[pytest.mark.engine, mark] + ([pytest.mark.slow] if name in slow else []))
+            for name, mark in requires.items()]
 
 
 def free_fall_case(engine: str) -> Case:

@@ -154,6 +154,44 @@ def test_dask_local_cluster_gives_the_same_results(tmp_path: Path) -> None:
 
 @requires_liggghts
 @pytest.mark.engine
+def test_a_shared_run_is_made_once_while_another_process_waits_for_it(tmp_path: Path) -> None:
+    """Two workers need the same run (a packing, say): the first makes it under its directory's lock;
+    the second, arriving while it runs, waits and reuses it (runner.ensure_run)."""
+    import threading
+
+    from conftest import free_fall_case
+    from orchestrator import rundir
+    from orchestrator.runner import ensure_run
+
+    case = free_fall_case("liggghts")
+    directory = tmp_path / rundir.run_id(case)
+    second: dict[str, object] = {}
+
+    def arrive_while_running() -> None:
+        deadline = time.monotonic() + 60.0
+        while not rundir.is_locked(directory) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        second["arrived_while_locked"] = rundir.is_locked(directory)
+        second["result"] = ensure_run(case, tmp_path, "shared")
+        second["returned"] = time.monotonic()
+
+    waiter = threading.Thread(target=arrive_while_running)
+    waiter.start()
+    made = ensure_run(case, tmp_path, "shared")
+    finished = time.monotonic()
+    waiter.join(timeout=120.0)
+    assert made == (directory, False)
+    assert second["arrived_while_locked"] and second["result"] == (directory, True)
+    assert second["returned"] >= finished - 0.5  # it came back only once the run was there
+    assert [d.name for d in tmp_path.iterdir()] == [directory.name]  # one run, no attic
+
+
+# 72 s of the default run's budget; its two parts are checked apart, faster: one preparation shared by
+# a campaign's points (tests/test_collapse.py, test_campaign_over_slopes_shares_the_preparation) and
+# a worker waiting for a run another one is making (the test above). So it runs with -m slow.
+@requires_liggghts
+@pytest.mark.engine
+@pytest.mark.slow
 def test_avalanche_campaign_shares_one_packing(tmp_path: Path) -> None:
     """A campaign over an avalanche study: two board frictions, one packing made once and fed to both."""
     from conftest import tiny_study

@@ -27,8 +27,6 @@ class Capabilities:
         engine emulates the law with a spring-dashpot of the same loading stiffness and restitution.
     implicit: contact dynamics without stiffness (e_n², k_n and k_t unused); its step is
         `default_step`, not a fraction of a contact duration.
-    placement_tolerance: m; how far from the requested centre the engine may place a clump when it
-        inserts it (packings leave twice that between bricks).
     state_file: the file `save_state` writes in the run directory (None: no restart file).
     contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
     """
@@ -40,7 +38,6 @@ class Capabilities:
     restart: bool
     compiled_law: bool
     implicit: bool
-    placement_tolerance: float = 0.0
     default_step: float | None = None
     state_file: str | None = None
     contact_output: bool = False
@@ -63,9 +60,8 @@ ENGINES: dict[str, EngineEntry] = {
         EngineEntry(
             "liggghts",
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
-            # Measured: a multisphere template is inserted within 1 mm of the requested centre.
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
-                         implicit=False, placement_tolerance=1e-3, state_file="state.restart", contact_output=True),
+                         implicit=False, state_file="state.restart", contact_output=True),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
         ),
         EngineEntry(

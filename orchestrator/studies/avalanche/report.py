@@ -61,11 +61,33 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
         ]
     packing = report.get("packing")
     if packing:
-        target = packing["target_apparent_density"]
-        value = packing["apparent_density"]
-        verdict = "pass" if abs(value / target - 1) <= 0.1 else "off by more than 10 %"
-        rows.append(("apparent density (kg/m³)", value, f"{target:g}", verdict))
+        target, value = packing["target_apparent_density"], packing["apparent_density"]
+        box = report.get("study", {}).get("geometry", {})
+        floor = box.get("box_depth", EXPERIMENT_BOX[0]) * box.get("box_width", EXPERIMENT_BOX[1])
+        rows.append(("apparent density (kg/m³)", value, f"{target:g} (the experiment's {EXPERIMENT_BOX[0]:g} × {EXPERIMENT_BOX[1]:g} m box)",
+                     packing_verdict(value, target, floor)))
     return rows
+
+
+# The experiment's release box floor (m; Manzella & Labiouse 2009): the densities of its packings
+# (1000 kg/m³ poured, 1600 piled) were reached in it.
+EXPERIMENT_BOX = (0.6, 0.4)
+DENSITY_TOLERANCE = 0.03  # relative; the study's full-scale packings are reached within it
+
+
+def packing_verdict(value: float, target: float, floor: float) -> str:
+    """The check of a packing's apparent density (kg/m³) against its target, for a box floor of
+    `floor` m². A box with a fraction of the experiment's floor packs looser than the experiment's
+    (measured 2026-11-30 with Table 1 throughout: 958 kg/m³ in an eighth of its floor, 710–819 in the
+    demo's sixteenth; docs/studies/avalanche.md), so a miss in a box of less than half the
+    experiment's floor is said to be the box's."""
+    off = value / target - 1.0
+    if abs(off) <= DENSITY_TOLERANCE:
+        return "pass"
+    share = EXPERIMENT_BOX[0] * EXPERIMENT_BOX[1] / floor
+    if share >= 2.0:
+        return f"off by {off:+.0%}: expected, a box 1/{share:.0f} of the experiment's floor packs looser (walls)"
+    return f"off by {off:+.0%}"
 
 
 FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
