@@ -207,8 +207,8 @@ def _demo_section(record: dict[str, Any], figures: Path, figures_link: str) -> l
     densities = {engine: [run["apparent_density"] for run in record["demo"][engine]] for engine in engines}
     lines += ["", "Apparent density of the packings (kg/m³; the experiment's random pour: 1000 in its 0.6 × 0.4 m box): "
               + ", ".join(f"{engine} {min(v):.0f}–{max(v):.0f}" for engine, v in densities.items())
-              + ". The demo's box has 1/16 of that floor and packs looser; the full-scale preset reaches the "
-              "experiment's density ([Avalanche studies](studies/avalanche.md#packing-density)).", ""]
+              + ". The demo's box has 1/16 of that floor and packs looser; full-scale packings are on "
+              "[Avalanche studies](studies/avalanche.md#packing-density).", ""]
     _plot_demo(record, reference, engines, figures / "avalanche_demo.png")
     lines += [f"![Demo deposits]({figures_link}/avalanche_demo.png)", "",
               "Each metric's runs, one row per engine and the study's code, scaled by the study code's midpoint.", ""]
