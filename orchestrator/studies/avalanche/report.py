@@ -78,8 +78,8 @@ DENSITY_TOLERANCE = 0.03  # relative; the study's full-scale packings are reache
 def packing_verdict(value: float, target: float, floor: float) -> str:
     """The check of a packing's apparent density (kg/m³) against its target, for a box floor of
     `floor` m². A box with a fraction of the experiment's floor packs looser than the experiment's
-    (measured 2026-11-30 with Table 1 throughout: 958 kg/m³ in an eighth of its floor, 710–819 in the
-    demo's sixteenth; docs/studies/avalanche.md), so a miss in a box of less than half the
+    (measured 2026-11-30 with Table 1 throughout: 933–958 kg/m³ in a quarter or an eighth of its floor,
+    710–819 in the demo's sixteenth; docs/studies/avalanche.md), so a miss in a box of less than half the
     experiment's floor is said to be the box's."""
     off = value / target - 1.0
     if abs(off) <= DENSITY_TOLERANCE:
