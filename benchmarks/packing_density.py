@@ -27,7 +27,7 @@ from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 from orchestrator.runner import ensure_run  # noqa: E402
 from orchestrator.studies.avalanche.geometry import apparent_density  # noqa: E402
-from orchestrator.studies.avalanche.study import AvalancheKind, load_study, packing_case  # noqa: E402
+from orchestrator.studies.avalanche.study import KIND, load_study, packing_case  # noqa: E402
 
 STUDIES = [REPO / "cases" / "avalanche" / "random_pour_full_kn2e4.yaml", REPO / "cases" / "avalanche" / "ordered_pile_full.yaml"]
 RESULT = Path(os.environ.get("BENCH_RESULT", REPO / "docs" / "benchmarks" / "packing_density.json"))
@@ -36,10 +36,9 @@ RESULT = Path(os.environ.get("BENCH_RESULT", REPO / "docs" / "benchmarks" / "pac
 def measure(study_path: Path, root: Path) -> dict[str, object]:
     """Pack one study (or reuse its packing under `root`) and read the density of its last frame."""
     study = load_study(study_path)
-    kind = AvalancheKind()
     started = time.perf_counter()
-    options = RunOptions(default_grid=kind.processor_grid)
-    directory, reused = ensure_run(packing_case(study), root, kind.preparation, lambda d: kind.state_file(study, d), None, None, options)
+    options = RunOptions(default_grid=KIND.processor_grid)
+    directory, reused = ensure_run(packing_case(study), root, KIND.preparation, lambda d: KIND.state_file(study, d), None, None, options)
     wall = time.perf_counter() - started
     packed = read_results(directory / "results.h5")
     density = apparent_density(study.geometry.build(), packed.position[-1], packed.orientation[-1], study.brick.build())

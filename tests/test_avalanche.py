@@ -38,7 +38,7 @@ def test_brick_counts_match_the_2012_study() -> None:
 def test_rain_grid_lies_inside_the_box_footprint() -> None:
     geometry = AvalancheGeometry()
     positions, orientations = rain_positions(geometry, BRICK, 300, seed=3)
-    axes = np.stack([-geometry.down, [0.0, 1.0, 0.0], geometry.normal])
+    axes = geometry.box_axes
     local = (positions - geometry.box_corner()) @ axes.T
     assert np.all(local[:, 0] - BRICK.bounding_radius >= 0) and np.all(local[:, 0] + BRICK.bounding_radius <= geometry.box_depth)
     assert np.all(local[:, 1] - BRICK.bounding_radius >= 0) and np.all(local[:, 1] + BRICK.bounding_radius <= geometry.box_width)
@@ -63,7 +63,7 @@ def test_ordered_pile_lays_bricks_along_the_slope_at_the_experiments_density() -
     # The pile as a study lays it: 19 × 26 still fit at PILE_GAP, and once the layers have settled onto
     # each other (gaps normal to the floor closed) it is within 3 % of the experiment's 1600 kg/m³.
     positions, orientations = ordered_pile(geometry, BRICK, 19 * 26 * 20, gap=PILE_GAP)
-    axes = np.stack([-geometry.down, [0.0, 1.0, 0.0], geometry.normal])
+    axes = geometry.box_axes
     local = (positions - geometry.box_corner()) @ axes.T
     assert local[:, 0].max() + BRICK.length / 2 < 0.6 and local[:, 1].max() + BRICK.width / 2 < 0.4
     layer = np.round((local[:, 2] - PILE_GAP) / (BRICK.thickness + PILE_GAP) - 0.5)
@@ -105,7 +105,7 @@ def test_flipped_bevelled_pile_turns_bricks_at_random_and_keeps_each_inside_its_
     # nominal box on either side still leave the neighbours apart.
     rows, columns = pile_rows(geometry, bevelled, gap)
     cell = bevelled.extent + gap
-    axes = np.stack([-geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal])
+    axes = geometry.box_axes
     index = np.arange(count)
     cells = np.stack([index % rows, (index // rows) % columns, index // (rows * columns)], axis=1)
     for k in range(count):

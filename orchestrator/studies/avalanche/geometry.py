@@ -52,10 +52,14 @@ class AvalancheGeometry:
         """Lowest corner of the box: at the trap, on the board, at y = -width/2."""
         return self.on_slope(self.trap_distance, -self.box_width / 2)
 
+    @property
+    def box_axes(self) -> np.ndarray:
+        """(3, 3) rows: the box frame's axes in the world (u upslope, v across, n normal to the slope)."""
+        return np.stack([-self.down, np.array([0.0, 1.0, 0.0]), self.normal])
+
     def box_to_world(self, local: np.ndarray) -> np.ndarray:
         """(…, 3) box-frame points (u upslope, v across, n normal) to world points."""
-        axes = np.stack([-self.down, np.array([0.0, 1.0, 0.0]), self.normal])
-        return self.box_corner() + np.asarray(local) @ axes
+        return self.box_corner() + np.asarray(local) @ self.box_axes
 
     def walls(self, trap_closed: bool, wall_height: float | None = None) -> list[dict[str, object]]:
         """Rectangles: slope board, flat board, box side and back walls, and the trap if closed."""
@@ -131,7 +135,7 @@ def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orienta
     positions (N, 3) m; orientations (N, 4) unit quaternions (w, x, y, z).
     """
     spacing = spacing or brick.extent[2] / 4.0
-    axes = np.stack([-geometry.down, np.array([0.0, 1.0, 0.0]), geometry.normal])
+    axes = geometry.box_axes
     heights = top_surface(geometry.box_depth, geometry.box_width, spacing,
                           (np.asarray(positions) - geometry.box_corner()) @ axes.T,
                           axes @ quaternion_matrices(np.asarray(orientations)), brick)
@@ -159,9 +163,8 @@ def top_surface(depth: float, width: float, spacing: float, centres: np.ndarray,
         uu, vv = np.meshgrid(u[i] - centre[0], v[j] - centre[1], indexing="ij")
         origin = np.stack([uu, vv, np.zeros_like(uu)], axis=-1) @ rotation  # brick frame, line start at the centre's height
         direction = rotation[2]  # frame's n in the brick frame
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.where(np.abs(direction) > 1e-12, direction, 1e-12)
-            t1, t2 = (-half - origin) / step, (half - origin) / step
+        step = np.where(np.abs(direction) > 1e-12, direction, 1e-12)  # a face parallel to the line: its slab is all or nothing
+        t1, t2 = (-half - origin) / step, (half - origin) / step
         enter, leave = np.minimum(t1, t2).max(axis=-1), np.maximum(t1, t2).min(axis=-1)
         top = np.where(enter <= leave, centre[2] + leave, 0.0)
         heights[i, j] = np.maximum(heights[i, j], top)

@@ -20,6 +20,7 @@ from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains
 from orchestrator.post.front import flat_phases
 from orchestrator.results import Trajectory
+from orchestrator.studies.avalanche.geometry import AvalancheGeometry
 
 # The 2012 study's front phases on the flat (reference.toml, random_pour_findings), for the plot.
 FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))
@@ -69,9 +70,9 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
     return rows
 
 
-# The experiment's release box floor (m; Manzella & Labiouse 2009): the densities of its packings
-# (1000 kg/m³ poured, 1600 piled) were reached in it.
-EXPERIMENT_BOX = (0.6, 0.4)
+# The experiment's release box floor (m; Manzella & Labiouse 2009, the set-up's defaults): the
+# densities of its packings (1000 kg/m³ poured, 1600 piled) were reached in it.
+EXPERIMENT_BOX = (AvalancheGeometry.box_depth, AvalancheGeometry.box_width)
 DENSITY_TOLERANCE = 0.03  # relative; the study's full-scale packings are reached within it
 
 
