@@ -183,10 +183,12 @@ class Clump(Strict):
 
     @field_validator("orientation")
     def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        """Normalised, but kept to the bit when already unit (to 1e-12): renormalising moves last bits, so a
+        case read back from case.json would hash to another run id and a finished run never be reused."""
         norm = math.sqrt(sum(v * v for v in value))
         if norm < 1e-9:
             raise ValueError("must be a non-zero quaternion (w, x, y, z)")
-        return tuple(v / norm for v in value)  # type: ignore[return-value]
+        return value if abs(norm - 1.0) <= 1e-12 else tuple(v / norm for v in value)  # type: ignore[return-value]
 
 
 class Bodies(Strict):

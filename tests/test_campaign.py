@@ -13,6 +13,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from orchestrator.campaign import store
 from orchestrator.campaign.execute import run_campaign
@@ -184,6 +186,32 @@ def test_a_shared_run_is_made_once_while_another_process_waits_for_it(tmp_path: 
     assert second["arrived_while_locked"] and second["result"] == (directory, True)
     assert second["returned"] >= finished - 0.5  # it came back only once the run was there
     assert [d.name for d in tmp_path.iterdir()] == [directory.name]  # one run, no attic
+
+
+def test_a_random_pours_packing_hashes_to_its_run_id_when_read_back() -> None:
+    """A finished run is reused only if its saved case.json hashes to its run id (rundir.current).
+    A random pour's bricks have random orientations, which validation must not move when read back
+    (renormalising moved the last bits of a third of them: every pour looked stale and ran again)."""
+    import json
+
+    from orchestrator import rundir
+    from orchestrator.case import Case
+    from orchestrator.studies.avalanche.study import load_study, packing_case
+
+    case = packing_case(load_study(REPO / "cases" / "avalanche" / "random_pour_full_kn2e4.yaml"))
+    assert len(case.bodies.clumps) > 6000  # about one in 150 of its orientations moved
+    read_back = Case.model_validate_json(json.dumps(rundir.canonical_inputs(case)))
+    assert rundir.run_id(read_back) == rundir.run_id(case)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.tuples(*[st.floats(-1.0, 1.0, allow_nan=False)] * 4).filter(lambda q: sum(v * v for v in q) > 1e-6))
+def test_a_clumps_orientation_is_a_unit_quaternion_that_reads_back_to_the_bit(quaternion: tuple[float, ...]) -> None:
+    from orchestrator.case import Clump
+
+    clump = Clump(shape="brick", material="brick", position=(0.0, 0.0, 0.0), orientation=quaternion)
+    assert abs(sum(v * v for v in clump.orientation) - 1.0) < 1e-12
+    assert Clump.model_validate_json(clump.model_dump_json()).orientation == clump.orientation
 
 
 # 72 s of the default run's budget; its two parts are checked apart, faster: one preparation shared by
