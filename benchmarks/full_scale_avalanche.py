@@ -29,11 +29,11 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
-from orchestrator.case import Case  # noqa: E402
 from orchestrator.studies.avalanche.study import load_study, run_study
 from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
+from orchestrator.rundir import saved_case  # noqa: E402
 
 STUDY = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
 RESULT = Path(os.environ.get("BENCH_RESULT", REPO / "docs" / "benchmarks" / "full_scale.json"))
@@ -61,7 +61,7 @@ def stage_record(rundir: Path) -> dict[str, float]:
     """Steps, simulated time and engine wall time of one finished stage (run.json, results.h5): a stage
     that stopped at rest ran fewer steps than its schedule."""
     record = json.loads((rundir / "run.json").read_text())
-    schedule = physics.schedule(Case.model_validate(record["case"]))
+    schedule = physics.schedule(saved_case(rundir))
     attrs = read_results(rundir / "results.h5").attrs
     simulated = float(attrs.get("stopped_at_rest", schedule.end_time))
     return {"steps": round(simulated / schedule.dt), "dt_s": schedule.dt, "simulated_s": simulated,
