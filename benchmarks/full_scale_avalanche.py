@@ -81,14 +81,18 @@ def main() -> None:
     release = read_results(outdir / "run" / "results.h5")
     speeds = np.linalg.norm(release.velocity[-1], axis=1)
     packing_dir = Path(report["packing"]["directory"])
+    stages = {"packing": stage_record(packing_dir), "release": stage_record(outdir / "run")}
+    # A stage made before (a reused packing, a finished release) counts with its recorded wall time.
+    ran_all = not report["finished_before"] and not report["packing"].get("reused")
+    if not ran_all:
+        wall = sum(stage["wall_s"] or 0.0 for stage in stages.values())
     result = {
         "study": str(study_path.relative_to(REPO) if study_path.is_relative_to(REPO) else study_path),
         "engine": study.engine.value,
         "bricks": release.n_bodies,
         "wall_s": wall,
-        "packing": stage_record(packing_dir),
-        "release": stage_record(outdir / "run"),
-        "peak_rss_children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0,
+        **stages,
+        "peak_rss_children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0 if ran_all else None,
         "final_max_speed_m_s": float(speeds.max()),
         "final_mean_speed_m_s": float(speeds.mean()),
         "deposit": report["deposit"],
