@@ -58,7 +58,7 @@ def progress_logger(log: Path, started: float) -> Callable[[str], Callable[[floa
 
 
 def stage_record(rundir: Path) -> dict[str, float]:
-    """Steps, simulated time and engine wall time of one finished stage (run.json, results.h5): a stage
+    """Steps, simulated time and engine wall time of one finished stage (run.json, case.json, results.h5): a stage
     that stopped at rest ran fewer steps than its schedule."""
     record = json.loads((rundir / "run.json").read_text())
     schedule = physics.schedule(saved_case(rundir))

@@ -188,20 +188,17 @@ def test_a_shared_run_is_made_once_while_another_process_waits_for_it(tmp_path: 
     assert [d.name for d in tmp_path.iterdir()] == [directory.name]  # one run, no attic
 
 
-def test_a_random_pours_packing_hashes_to_its_run_id_when_read_back() -> None:
+def test_a_random_pours_packing_hashes_to_its_run_id_when_read_back(tmp_path: Path) -> None:
     """A finished run is reused only if its saved case.json hashes to its run id (rundir.current).
     A random pour's bricks have random orientations, which validation must not move when read back
     (renormalising moved the last bits of a third of them: every pour looked stale and ran again)."""
-    import json
-
     from orchestrator import rundir
-    from orchestrator.case import Case
     from orchestrator.studies.avalanche.study import load_study, packing_case
 
     case = packing_case(load_study(REPO / "cases" / "avalanche" / "random_pour_full_kn2e4.yaml"))
     assert len(case.bodies.clumps) > 6000  # about one in 150 of its orientations moved
-    read_back = Case.model_validate_json(json.dumps(rundir.canonical_inputs(case)))
-    assert rundir.run_id(read_back) == rundir.run_id(case)
+    rundir.save_inputs(tmp_path, case)
+    assert rundir.run_id(rundir.saved_case(tmp_path)) == rundir.run_id(case)
 
 
 @settings(max_examples=300, deadline=None)
