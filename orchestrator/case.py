@@ -14,8 +14,8 @@ from typing import Annotated, Literal, Union
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from orchestrator.bricks import BrickClump, brick_clump
-from orchestrator.engines.registry import DEFAULT_ENGINE, Engine, capabilities
-from orchestrator.engines.settings import EngineSections
+from orchestrator.capabilities import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.engine_sections import EngineSections
 from orchestrator.validation import CaseError, parse_model, read_yaml  # noqa: F401  (CaseError re-exported)
 
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
@@ -368,7 +368,7 @@ class Case(EngineSections, Strict):
 
 def engine_limits(case: Case) -> str | None:
     """The first part of `case` that its engine cannot run, as `field: reason; engines that can: …`."""
-    from orchestrator.engines.registry import engines_with
+    from orchestrator.capabilities import engines_with
 
     can = capabilities(case.engine)
     engine = case.engine.value

@@ -8,6 +8,7 @@ from __future__ import annotations
 import warnings
 
 from pathlib import Path
+from typing import Sequence
 
 import meshio
 import numpy as np
@@ -55,7 +56,7 @@ def write_ascii_stl(path: Path, triangles: np.ndarray) -> None:
     meshio.write_points_cells(path, points, cells, file_format="stl", binary=False)
 
 
-def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -> Domain:
+def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float, table: Sequence[physics.BodyInfo] | None = None) -> Domain:
     """A box holding every body and wall, padded so that bodies do not leave it in normal use.
 
     Padding: 10 % of the extent, 5 radii and the distance the fastest initial body covers in the
@@ -63,7 +64,7 @@ def automatic_domain(case: Case, triangles: list[np.ndarray], end_time: float) -
     run so that its bodies stay inside.
     A case can always give `domain:` explicitly.
     """
-    table = physics.bodies(case)
+    table = physics.bodies(case) if table is None else table
     centres = np.array([b.position for b in table])
     radii = np.array([b.radius for b in table])
     points = [centres - radii[:, None], centres + radii[:, None]] + [t.reshape(-1, 3) for t in triangles]

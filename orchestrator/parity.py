@@ -34,8 +34,8 @@ import numpy as np
 from orchestrator.bricks import brick_clump, quaternion_matrices, quaternion_matrix
 from orchestrator.case import Case, parse_case
 from orchestrator.engines import EngineError
-from orchestrator.engines.registry import ENGINE_NAMES, ENGINES, engines_with
-from orchestrator.results import RESULTS, Trajectory, read_results
+from orchestrator.capabilities import ENGINE_NAMES, ENGINES, engines_with
+from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
 
 EN2, SPEED, RADIUS, MU = 0.53, 0.5, 0.005, 0.46
@@ -285,12 +285,12 @@ def run_micro(case: MicroCase, engine: str, directory: Path) -> float:
     raises EngineError, unless it is the one the case expects (`ends_with`)."""
     directory.mkdir(parents=True, exist_ok=True)
     try:
-        run_case(case.build(engine, directory), directory, directory / "run")
+        run_case(case.build(engine, directory), directory, directory / RELEASE_DIR)
     except EngineError as error:
         if case.ends_with and case.ends_with in error.summary:
             return 1.0
         raise
-    return case.measure(read_results(directory / "run" / RESULTS))
+    return case.measure(read_results(directory / RELEASE_DIR / RESULTS))
 
 
 def run_matrix(engines: tuple[str, ...], directory: Path, on_outcome: Callable[[Outcome], None] | None = None) -> list[Outcome]:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from scipy.optimize import brentq
 
 from orchestrator.case import Case, CaseError, ContactLaw, Sphere
-from orchestrator.engines.registry import capabilities
+from orchestrator.capabilities import capabilities
 
 
 def sphere_mass(sphere: Sphere, density: float) -> float:
@@ -121,11 +121,12 @@ class PairConstants:
     reference_mass: float
 
 
-def pair_constants(case: Case, dashpot_for_bilinear: bool = False) -> list[PairConstants]:
+def pair_constants(case: Case, dashpot_for_bilinear: bool = False, damping: bool = True) -> list[PairConstants]:
     """Constants for every pair listed in the case (wall/wall pairs get no damping: they never touch).
 
     `dashpot_for_bilinear`: an engine without the bilinear law (YADE) emulates it with the linear
-    spring-dashpot of the same loading stiffness, damped to the same restitution.
+    spring-dashpot of the same loading stiffness, damped to the same restitution. `damping` False:
+    no viscous coefficient at all (cn = 0), for an engine without stiffness (contact dynamics).
     """
     masses = reference_masses(case)
     constants = []
@@ -136,7 +137,7 @@ def pair_constants(case: Case, dashpot_for_bilinear: bool = False) -> list[PairC
             reference = 0.0
         else:
             reference = effective_mass(mass_a, mass_b)
-        damped = pair.law is ContactLaw.linear or dashpot_for_bilinear
+        damped = damping and (pair.law is ContactLaw.linear or dashpot_for_bilinear)
         cn = linear_damping(pair.kn, pair.en2, reference) if damped and reference > 0 else 0.0
         constants.append(
             PairConstants(

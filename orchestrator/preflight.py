@@ -14,13 +14,14 @@ do instead:
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from orchestrator import geometry, physics
+from orchestrator import physics
 from orchestrator.case import Case, CaseError
-from orchestrator.engines.registry import capabilities
+from orchestrator.capabilities import capabilities
 from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
@@ -32,13 +33,16 @@ MAX_RESULTS_BYTES = 4 * 2**30  # results.h5 holds 13 doubles per body and frame
 OVERLAP_TOLERANCE = 0.05
 
 
-def check(case: Case, case_dir: Path) -> None:
-    """Raise CaseError for the first problem found; return when the case is fit to run."""
-    plan, table = physics.schedule(case), physics.bodies(case)
+def check_all(case: Case, case_dir: Path, plan: physics.Schedule, table: Sequence[physics.BodyInfo],
+              triangles: Sequence[np.ndarray]) -> None:
+    """Raise CaseError for the first problem found; return when the case is fit to run.
+
+    Called by `orchestrator.plan.make_plan` with the numbers the run will use (its schedule, body
+    table and wall triangles, one (t, 3, 3) array per wall), so they are computed once."""
     check_step(case, plan.dt)
     check_output(case, plan, len(table))
     check_speeds(case, plan.dt, table)
-    check_geometry(case, case_dir, table)
+    check_geometry(case, table, triangles)
     check_initial_state(case, case_dir)
 
 
@@ -60,7 +64,7 @@ def check_output(case: Case, plan: physics.Schedule, bodies: int) -> None:
                         f"allowed: at most {MAX_FRAMES} frames and {MAX_RESULTS_BYTES // 2**30} GB, an interval of at least {smallest:.3g} s")
 
 
-def check_speeds(case: Case, dt: float, table: list[physics.BodyInfo]) -> None:
+def check_speeds(case: Case, dt: float, table: Sequence[physics.BodyInfo]) -> None:
     if capabilities(case.engine).implicit:  # contact dynamics finds contacts over the whole step
         return
     smallest = min(b.radius for b in table)
@@ -72,14 +76,14 @@ def check_speeds(case: Case, dt: float, table: list[physics.BodyInfo]) -> None:
                             f"{MAX_TRAVEL_PER_STEP * smallest / dt:.3g} m/s at this step")
 
 
-def check_geometry(case: Case, case_dir: Path, table: list[physics.BodyInfo]) -> None:
+def check_geometry(case: Case, table: Sequence[physics.BodyInfo], wall_triangles: Sequence[np.ndarray]) -> None:
     spheres = case.bodies.spheres
     if spheres:
         centres = np.array([s.position for s in spheres])
         radii = np.array([s.radius for s in spheres])
         glued = np.array([s.fixed for s in spheres])
         _check_overlaps(centres, radii, glued)
-        for wall, triangles in zip(case.walls, (geometry.wall_triangles(w, case_dir) for w in case.walls)):
+        for wall, triangles in zip(case.walls, wall_triangles):
             gaps = np.where(glued, np.inf, _distance_to_triangles(centres, triangles) - radii)  # glued: never moved by a wall
             worst = int(np.argmin(gaps))
             if gaps[worst] < -OVERLAP_TOLERANCE * radii[worst]:

@@ -48,9 +48,12 @@ import numpy as np
 
 FORMAT_VERSION = 1
 # What a run directory holds besides this file (rundir.py writes and checks them).
+# The run directory's layout, one home for each name (orchestrator.rundir owns what is in them).
 RESULTS = "results.h5"
 RUN_RECORD = "run.json"  # the record: run_id, build, status, timings, metrics
 CASE_COPY = "case.json"  # the validated inputs, canonical JSON
+REPORT = "report.json"  # a study's report, beside its release
+RELEASE_DIR = "run"  # a study's (or a micro-case's) run, inside its directory
 
 
 def read_json(path: Path) -> dict | None:

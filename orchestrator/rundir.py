@@ -1,12 +1,15 @@
 """One run directory: its identity, its saved inputs, its record, its status and its lock.
 
-A run's id hashes everything that decides its results: the canonical inputs (a validated case, or
-a study), the step schedule, and the engine build (engine version, deck templates or runner
-program, compiled contact plugin). The same inputs on the same build give the same id; a template
-or plugin change gives another. Layout of a run directory:
+A run's id hashes everything that decides its results, signac's way (a job is its canonical state
+point, hashed, checked on load): the inputs' fields that differ from their defaults (a validated
+case, or a study) with the schema version, the content of every file the case names (meshes, the
+initial state), and the engine build (the engine's version as it reports it, the code and
+templates that write its deck, the compiled contact plugin). The same inputs on the same build give
+the same id; an edited mesh, brick or template gives another. Layout of a run directory:
 
     case.json   the validated inputs, canonical JSON (a case, or a study for a study run)
-    run.json    the record: run_id, build, status (running | completed | failed), timings, metrics
+    run.json    the record: run_id, build, files (the named files' digests), status (running |
+                completed | failed), timings, metrics; written by `write_record` only
     .lock       held (fcntl) by the process working in the directory: a run is `running` while
                 its lock is held, and nothing else (no PID file) decides it
     results.h5  the frames (case runs; a study run's record points at its release's)
@@ -25,6 +28,7 @@ import hashlib
 import json
 import os
 import shutil
+import stat
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
@@ -33,7 +37,7 @@ from typing import Any
 import h5py
 from pydantic import BaseModel
 
-from orchestrator.case import Case
+from orchestrator.case import Case, MeshWall
 from orchestrator.engines import get_adapter
 from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
 
@@ -54,31 +58,74 @@ def now() -> str:
 
 
 # -- identity -----------------------------------------------------------------------------------
-@lru_cache(maxsize=None)
-def _engine_version(engine: str) -> str | None:
-    return get_adapter(engine).info().version
+# The identity leaves out every field equal to its default, so adding a field with a default keeps
+# every id. Changing what an existing default *is* must change ids: bump this, and record the new
+# defaults (tests/test_identity.py holds the defaults of each schema version).
+SCHEMA_VERSION = 1
 
 
 def build_stamp(engine: str) -> dict[str, Any]:
-    """What turns inputs into results besides the inputs: engine, its version, the hash of its deck
-    templates or runner program, and of its compiled contact plugin (when it has one)."""
+    """What turns inputs into results besides the inputs: engine, its version (asked of the engine),
+    the hash of the code and templates that write its deck, and of its compiled contact plugin."""
     adapter = get_adapter(engine)
-    return {"engine": engine, "version": _engine_version(engine), **adapter.build_inputs()}
+    return {"engine": engine, "version": adapter.info().version, **adapter.build_inputs()}
 
 
 def canonical_inputs(inputs: BaseModel) -> dict[str, Any]:
+    """Every field, defaults included: what case.json keeps for a reader."""
     return inputs.model_dump(mode="json")
 
 
-def run_id(inputs: BaseModel, build: dict[str, Any] | None = None) -> str:
-    """16 hex digits of sha256 over the canonical inputs, the schedule (a case's) and the build."""
-    from orchestrator import physics
+def identity_inputs(inputs: BaseModel) -> dict[str, Any]:
+    """The fields a run id covers: those that differ from their defaults."""
+    return inputs.model_dump(mode="json", exclude_defaults=True)
 
+
+def named_files(inputs: BaseModel) -> list[str]:
+    """The files a case names (mesh walls, the initial state), as written in it; a study names none."""
+    if not isinstance(inputs, Case):
+        return []
+    meshes = [wall.file for wall in inputs.walls if isinstance(wall, MeshWall)]
+    return meshes + ([inputs.initial_state] if inputs.initial_state else [])
+
+
+def file_digests(inputs: BaseModel, case_dir: Path | None) -> dict[str, str]:
+    """name → sha256 of the content of each file the inputs name (relative to case_dir, else the
+    working directory); 'missing' or 'not a regular file' when it cannot be read as one."""
+    root = case_dir if case_dir is not None else Path(".")
+    return {name: _file_digest(root / name) for name in named_files(inputs)}
+
+
+def _file_digest(path: Path) -> str:
+    try:
+        info = path.stat()
+    except OSError:
+        return "missing"
+    if not stat.S_ISREG(info.st_mode):  # a FIFO or a device is never read (it could hang or never end)
+        return "not a regular file"
+    return _content_digest(str(path.resolve()), info.st_size, info.st_mtime_ns)
+
+
+@lru_cache(maxsize=256)
+def _content_digest(path: str, size: int, mtime_ns: int) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def run_id(inputs: BaseModel, build: dict[str, Any] | None = None, case_dir: Path | None = None,
+           files: dict[str, str] | None = None) -> str:
+    """16 hex digits of sha256 over the inputs' non-default fields, the schema version, the content of
+    every file they name (`files`, else read now from case_dir) and the build (else today's)."""
     engine = getattr(inputs, "engine").value
-    stamp: dict[str, Any] = {"inputs": canonical_inputs(inputs), "build": build if build is not None else build_stamp(engine)}
-    if isinstance(inputs, Case):
-        plan = physics.schedule(inputs)
-        stamp["schedule"] = [plan.dt, plan.output_every, plan.frames, plan.total_steps]
+    stamp: dict[str, Any] = {
+        "schema": SCHEMA_VERSION,
+        "inputs": identity_inputs(inputs),
+        "files": files if files is not None else file_digests(inputs, case_dir),
+        "build": build if build is not None else build_stamp(engine),
+    }
     return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
 
 
@@ -90,6 +137,13 @@ def save_inputs(directory: Path, inputs: BaseModel) -> None:
 def saved_case(directory: Path) -> Case:
     """The case a run directory was made from (case.json)."""
     return Case.model_validate_json((directory / CASE_COPY).read_text())
+
+
+def write_record(directory: Path, record: dict[str, Any]) -> None:
+    """The one writer of run.json: atomically, with a status a reader knows (STATUSES)."""
+    if record.get("status") not in STATUSES:
+        raise ValueError(f"run.json: status {record.get('status')!r} is not one of {STATUSES}")
+    write_json_atomic(directory / RUN_RECORD, record)
 
 
 # -- locking ------------------------------------------------------------------------------------
@@ -168,7 +222,8 @@ def current(directory: Path, record: dict[str, Any], inputs_model: type[BaseMode
         inputs = inputs_model.model_validate_json((directory / CASE_COPY).read_text())
     except (ValueError, OSError):
         return False
-    if run_id(inputs, build) != record["run_id"]:
+    files = record.get("files", {})
+    if not isinstance(files, dict) or run_id(inputs, build, files=files) != record["run_id"]:
         return False
     return not check_build or build == build_stamp(str(build.get("engine", "")))
 

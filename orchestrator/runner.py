@@ -17,13 +17,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from orchestrator import __version__, physics, preflight, rundir
+from orchestrator import __version__, rundir
 from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
-from orchestrator.engines import common
 from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, ProgressCallback
-from orchestrator.engines.checkpoint import Resume
+from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
 from orchestrator.results import Trajectory, write_results
 
@@ -32,10 +31,10 @@ RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
 
 def render_case(case: Case, case_dir: Path, directory: Path) -> Path:
     """Write the deck (and its data files) only; returns the deck path."""
-    preflight.check(case, case_dir)
+    plan = make_plan(case, case_dir)
     directory.mkdir(parents=True, exist_ok=True)
     rundir.save_inputs(directory, case)
-    return get_adapter(case.engine.value).write_input(case, case_dir, directory)
+    return get_adapter(case.engine.value).write_input(plan, directory)
 
 
 def run_case(
@@ -46,67 +45,74 @@ def run_case(
     timeout: float | None = None,
     adapter: EngineAdapter | None = None,
     options: RunOptions | None = None,
+    plan: RunPlan | None = None,
 ) -> dict[str, Any]:
     """Run a validated case in `directory` and return the run record (also saved as run.json).
 
     Holds the directory's lock while it runs (rundir.Busy if another process holds it). Raises
     EngineError (after recording the failure in run.json) when the engine fails. `adapter`: an
     engine adapter set up by the caller (tuning a benchmark varies); default get_adapter(engine,
-    options), options being how the engine runs (MPI processes), never what it computes.
+    options), options being how the engine runs (MPI processes), never what it computes. `plan`:
+    the case's plan when the caller made it already (make_plan(case, case_dir)).
     """
     with rundir.locked(directory, wait=False):
-        return run_locked(case, case_dir, directory, progress, timeout, adapter or get_adapter(case.engine.value, options))
+        return run_locked(case, case_dir, directory, progress, timeout, adapter or get_adapter(case.engine.value, options), plan)
 
 
-def resume_point(case: Case, directory: Path, adapter: EngineAdapter | None = None, identity: str | None = None) -> Resume | None:
-    """The checkpoint a cut-off run of `case` in `directory` continues from, or None (start afresh).
+def resume_point(plan: RunPlan, directory: Path, adapter: EngineAdapter | None = None, identity: str | None = None) -> Resume | None:
+    """The checkpoint a cut-off run of the plan's case in `directory` continues from, or None (start afresh).
 
     A run is cut off when its record says `running` and no process holds the directory's lock (the
     caller holds it, or checks is_locked). It continues only with the same run id (same inputs and
     build) and a checkpoint completed before its newest frame.
     """
+    case = plan.case
     adapter = adapter or get_adapter(case.engine.value)
     previous = rundir.read_json(directory / RUN_RECORD)
     if adapter.checkpoint_ext is None or not previous or previous.get("status") != "running":
         return None
-    if previous.get("run_id") != (identity or rundir.run_id(case)):
+    if previous.get("run_id") != (identity or rundir.run_id(case, case_dir=plan.case_dir)):
         return None
-    reached = adapter.last_frame_step(case, directory)
-    found = adapter.usable_checkpoints(case, directory, reached)
+    reached = adapter.last_frame_step(plan, directory)
+    found = adapter.usable_checkpoints(plan, directory, reached)
     if not found:
         return None
     step, path = found[-1]
     return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name, reached)
 
 
-def resumable(directory: Path) -> bool:
-    """Whether the run in `directory` (its case.json) would continue from a checkpoint."""
+def resumable(directory: Path, case_dir: Path, plan: RunPlan | None = None) -> bool:
+    """Whether the run in `directory` (of `plan`'s case, else its case.json, whose files are relative
+    to case_dir) would continue from a checkpoint."""
     try:
-        case = rundir.saved_case(directory)
+        plan = plan or make_plan(rundir.saved_case(directory), case_dir)
     except (OSError, ValueError):
         return False
-    return resume_point(case, directory) is not None
+    return resume_point(plan, directory) is not None
 
 
 def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCallback | None, timeout: float | None,
-               adapter: EngineAdapter | None = None) -> dict[str, Any]:
+               adapter: EngineAdapter | None = None, plan: RunPlan | None = None) -> dict[str, Any]:
     """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
     adapter = adapter or get_adapter(case.engine.value)
-    preflight.check(case, case_dir)
+    plan = plan or make_plan(case, case_dir)
     build = rundir.build_stamp(case.engine.value)
-    identity = rundir.run_id(case, build)
+    files = rundir.file_digests(case, case_dir)
+    identity = rundir.run_id(case, build, files=files)
     directory.mkdir(parents=True, exist_ok=True)
-    resume = resume_point(case, directory, adapter, identity)
-    if resume is None and (directory / RUN_RECORD).exists():
+    plan = plan.resumed(resume_point(plan, directory, adapter, identity))
+    if plan.resume is None and (directory / RUN_RECORD).exists():
         rundir.retire(directory, directory.parent)  # an earlier attempt's files: kept in ../attic, never mixed with this one's
-    segments = _segments(case, directory, resume)
+    segments = _segments(plan, directory)
     rundir.save_inputs(directory, case)
-    deck = adapter.write_input(case, case_dir, directory, resume)
+    deck = adapter.write_input(plan, directory)
+    warnings = adapter.warnings(plan)
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
         "kind": "case",
         "run_id": identity,
         "build": build,
+        "files": files,
         "engine": build["engine"],
         "engine_version": build["version"],
         "deck": deck.name,
@@ -115,18 +121,17 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         "segments": segments,
         # A cut-off segment reached further than the checkpoint the next one starts from: that is lost.
         "simulated_time_lost_s": sum(cut["reached_time_s"] - following["from_time_s"] for cut, following in zip(segments, segments[1:])),
-        **({"warnings": list(adapter.warnings)} if adapter.warnings else {}),
+        **({"warnings": list(warnings)} if warnings else {}),
     }
-    record_path = directory / RUN_RECORD
-    rundir.write_json_atomic(record_path, record)
+    rundir.write_record(directory, record)
     started = time.perf_counter()
     try:
-        adapter.execute(case, directory, progress=progress, timeout=timeout)
-        trajectory = adapter.read_output(case, directory)
-        check_inside(case, case_dir, trajectory, deck)
+        adapter.execute(plan, directory, progress=progress, timeout=timeout)
+        trajectory = adapter.read_output(plan, directory)
+        check_inside(plan, trajectory, deck)
     except EngineError as error:
         record.update(status="failed", error=error.summary, log_tail=error.tail, wall_time_s=time.perf_counter() - started)
-        rundir.write_json_atomic(record_path, record)
+        rundir.write_record(directory, record)
         raise
     engine_seconds = time.perf_counter() - started
     trajectory.attrs.update(engine=build["engine"], engine_version=build["version"] or "unknown", case_name=case.name)
@@ -140,35 +145,36 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         bodies=trajectory.n_bodies,
         metrics=summary.summary(trajectory),
     )
-    rundir.write_json_atomic(record_path, record)
+    rundir.write_record(directory, record)
     if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
         for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
             path.unlink()
     return record
 
 
-def _segments(case: Case, directory: Path, resume: Resume | None) -> list[dict[str, Any]]:
+def _segments(plan: RunPlan, directory: Path) -> list[dict[str, Any]]:
     """The run's segments so far, this one last: when each started and, for a continued run, the
     simulated time it starts from and the one its cut-off predecessor had reached (the difference is lost)."""
+    resume = plan.resume
     if resume is None:
         return [{"segment": 0, "started": rundir.now(), "from_time_s": 0.0}]
-    dt = physics.schedule(case).dt
+    dt = plan.schedule.dt
     previous = rundir.read_json(directory / RUN_RECORD) or {}
     segments = list(previous.get("segments") or [{"segment": 0, "started": previous.get("started"), "from_time_s": 0.0}])
     segments[-1] = {**segments[-1], "reached_time_s": (resume.reached_step or 0) * dt}
     return segments + [{"segment": resume.segment, "started": rundir.now(), "from_time_s": resume.step * dt}]
 
 
-def check_inside(case: Case, case_dir: Path, trajectory: Trajectory, deck: Path) -> None:
+def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> None:
     """Every engine ends a run whose bodies left the domain the same way (LIGGGHTS drops such bodies
     and says so; YADE and cocd would carry them on): an EngineError naming the first frame."""
-    domain = common.prepare(case, case_dir).domain
+    domain = plan.domain
     position = trajectory.position
     outside = np.isfinite(position).all(axis=2) & ((position < np.asarray(domain.lower)) | (position > np.asarray(domain.upper))).any(axis=2)
     if outside.any():
         frame = int(np.flatnonzero(outside.any(axis=1))[0])
         raise EngineError(f"{int(outside[frame].sum())} bodies left the simulation domain by t = {trajectory.time[frame]:.4g} s; "
-                          "enlarge `domain:` in the case", deck, deck.parent / "engine.log")
+                          "enlarge `domain:` in the case", deck, deck.parent / LOG_NAME)
 
 
 def ensure_run(
@@ -189,15 +195,16 @@ def ensure_run(
     interrupted attempt is moved to root/attic. `what` names the run in errors
     ("the packing run failed: …").
     """
-    directory = root / rundir.run_id(case)
+    directory = root / rundir.run_id(case, case_dir=root)
     with rundir.locked(directory, wait=True):
         required = state_file(directory)
         if rundir.status(directory, held=True) == "completed" and (required is None or required.is_file()):
             return directory, True
-        if any(entry.name != rundir.LOCK for entry in directory.iterdir()) and resume_point(case, directory) is None:
+        plan = make_plan(case, root)
+        if any(entry.name != rundir.LOCK for entry in directory.iterdir()) and resume_point(plan, directory) is None:
             rundir.retire(directory, root)
         try:
-            run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options))
+            run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)
         except EngineError as error:
             raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
     return directory, False

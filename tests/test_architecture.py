@@ -12,17 +12,19 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.engines.registry import ENGINE_NAMES
+from orchestrator.capabilities import ENGINE_NAMES
+from orchestrator.imports import package_imports, package_modules
 
 PACKAGE = Path(__file__).resolve().parent.parent / "orchestrator"
 
 LAYERS: list[tuple[str, ...]] = [
     # foundations: no import from the package, or only from each other
-    ("orchestrator", "orchestrator.engines.registry", "orchestrator.engines.settings", "orchestrator.results", "orchestrator.validation",
+    ("orchestrator", "orchestrator.capabilities", "orchestrator.engine_sections", "orchestrator.imports", "orchestrator.results",
+     "orchestrator.validation",
      "orchestrator.figures",
      "orchestrator.bricks", "orchestrator.contact.law", "orchestrator.contact"),
     ("orchestrator.case",),
-    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.preflight"),
+    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.preflight", "orchestrator.plan"),
     ("orchestrator.engines",),
     ("orchestrator.rundir",),
     ("orchestrator.runner",),
@@ -32,12 +34,7 @@ LAYERS: list[tuple[str, ...]] = [
 ]
 
 
-def module_name(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-MODULES = {module_name(path): path for path in sorted(PACKAGE.rglob("*.py"))}
+MODULES = package_modules()
 
 
 def layer_of(module: str) -> int:
@@ -49,19 +46,11 @@ def layer_of(module: str) -> int:
     return max(matches)[1]
 
 
-def package_imports(path: Path) -> set[str]:
-    """Modules of the package that `path` imports (at any depth of the file, lazily or not)."""
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom):
-            assert node.level == 0, f"{path}: relative import; the package imports absolutely"
-            if node.module and node.module.split(".")[0] == "orchestrator":
-                for alias in node.names:
-                    candidate = f"{node.module}.{alias.name}"
-                    found.add(candidate if candidate in MODULES else node.module)
-        elif isinstance(node, ast.Import):
-            found |= {alias.name for alias in node.names if alias.name.split(".")[0] == "orchestrator"}
-    return found
+def test_the_package_imports_absolutely() -> None:
+    """The import reader (orchestrator.imports) follows absolute imports only: a relative one would hide an edge."""
+    relative = [f"{name}:{node.lineno}" for name, path in MODULES.items() for node in ast.walk(ast.parse(path.read_text()))
+                if isinstance(node, ast.ImportFrom) and node.level]
+    assert not relative, f"relative imports: {relative}"
 
 
 def test_every_module_has_a_layer() -> None:
@@ -74,6 +63,17 @@ def test_no_import_from_a_higher_layer(module: str) -> None:
     own = layer_of(module)
     for imported in package_imports(MODULES[module]):
         assert layer_of(imported) <= own, f"{module} (layer {own}) imports {imported} (layer {layer_of(imported)})"
+
+
+def test_the_case_model_loads_no_engine_code() -> None:
+    """`import orchestrator.case` (and physics, pre-flight) loads nothing from engines/: the case model sits below the engines."""
+    import subprocess
+    import sys
+
+    probe = ("import sys, orchestrator.case, orchestrator.physics, orchestrator.preflight, orchestrator.geometry; "
+             "print(sorted(m for m in sys.modules if m.startswith('orchestrator.engines')))")
+    loaded = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == "[]", f"importing the case model loads engine modules: {loaded}"
 
 
 def test_no_import_cycle() -> None:
@@ -127,10 +127,15 @@ def engine_names_in_code(path: Path) -> list[str]:
     return hits
 
 
+# The engine table and the engine-only case sections: leaves below the case model, so they stand outside
+# engines/ (importing anything inside it runs engines/__init__), and they are where engines are named.
+ENGINE_TABLE = ("orchestrator.capabilities", "orchestrator.engine_sections")
+
+
 def test_no_engine_name_outside_engines() -> None:
-    """Callers ask the registry for a capability; only engines/ (and its registry) name engines."""
+    """Callers ask the engine table for a capability; only engines/ and the table name engines."""
     offenders = {module: hits for module, path in MODULES.items()
-                 if not module.startswith("orchestrator.engines") and (hits := engine_names_in_code(path))}
+                 if not module.startswith("orchestrator.engines") and module not in ENGINE_TABLE and (hits := engine_names_in_code(path))}
     assert not offenders, f"engine names outside engines/: {offenders}"
 
 

@@ -129,6 +129,7 @@ def test_the_compiled_law_is_the_same_whatever_the_neighbour_list_rebuilds(tmp_p
     cleared when it parts, not only when the list is rebuilt (before the deck's
     contact_distance_factor, 0.43 mm apart after 0.6 s)."""
     from orchestrator.engines import RunOptions, get_adapter
+    from orchestrator.plan import make_plan
     from test_checkpoint import colliding_spheres
 
     case = colliding_spheres("liggghts", "bilinear")
@@ -137,10 +138,11 @@ def test_the_compiled_law_is_the_same_whatever_the_neighbour_list_rebuilds(tmp_p
         directory = tmp_path / str(every_step)
         directory.mkdir()
         adapter = get_adapter("liggghts", RunOptions(checkpoint_interval=0))
-        deck = adapter.write_input(case, tmp_path, directory)
+        plan = make_plan(case, tmp_path)
+        deck = adapter.write_input(plan, directory)
         if every_step:
             deck.write_text(deck.read_text().replace("neigh_modify    delay 0", "neigh_modify    delay 0 every 1 check no", 1))
-        adapter.execute(case, directory)
-        runs.append(adapter.read_output(case, directory))
+        adapter.execute(plan, directory)
+        runs.append(adapter.read_output(plan, directory))
     assert "every 1 check no" in deck.read_text()
     assert np.array_equal(runs[0].position, runs[1].position)

@@ -28,6 +28,7 @@ from orchestrator.engines import checkpoint
 from orchestrator.engines.checkpoint import Resume, merge, next_segment, segment_files, segment_name
 from orchestrator.engines.options import CHECKPOINT_ENV
 from orchestrator.results import read_results
+from orchestrator.plan import RunPlan, make_plan
 from orchestrator.runner import resume_point, run_case
 
 from conftest import requires_liggghts, requires_yade
@@ -78,18 +79,20 @@ def test_a_run_continued_from_any_checkpoint_ends_as_the_uninterrupted_one(engin
     extra = {} if variant == "plain" else {**REST_AND_CONTACTS, "record_contacts": engine != "cocd"}
     case = trap_case(engine, **extra)
     adapter = get_adapter(engine, RunOptions(checkpoint_interval=0.1))
-    adapter.write_input(case, tmp_path, tmp_path)
-    adapter.execute(case, tmp_path)
-    whole = adapter.read_output(case, tmp_path)
-    kept = checkpoint.usable(tmp_path, adapter.checkpoint_ext, adapter.last_frame_step(case, tmp_path))
+    plan = make_plan(case, tmp_path)
+    adapter.write_input(plan, tmp_path)
+    adapter.execute(plan, tmp_path)
+    whole = adapter.read_output(plan, tmp_path)
+    kept = checkpoint.usable(tmp_path, adapter.checkpoint_ext, adapter.last_frame_step(plan, tmp_path))
     steps = [step for step, _ in kept]
     assert len(steps) == 2 and steps[0] * 2 == steps[1]  # the two newest kept: 0.1 and 0.2 s
-    found = adapter.usable_checkpoints(case, tmp_path, adapter.last_frame_step(case, tmp_path))
+    found = adapter.usable_checkpoints(plan, tmp_path, adapter.last_frame_step(plan, tmp_path))
     assert [step for step, _ in found] == (steps[1:] if engine == "liggghts" else steps)
     for segment, (step, path) in enumerate(found, start=1):
-        adapter.write_input(case, tmp_path, tmp_path, Resume(segment, step, path.name))
-        adapter.execute(case, tmp_path)
-        continued = adapter.read_output(case, tmp_path)
+        resumed = plan.resumed(Resume(segment, step, path.name))
+        adapter.write_input(resumed, tmp_path)
+        adapter.execute(resumed, tmp_path)
+        continued = adapter.read_output(resumed, tmp_path)
         assert np.array_equal(continued.time, whole.time)
         assert np.array_equal(continued.position, whole.position, equal_nan=True)
         assert np.array_equal(continued.velocity, whole.velocity, equal_nan=True)
@@ -109,9 +112,10 @@ def _demorch(*arguments: str, cwd: Path) -> subprocess.Popen:
 def _kill_after_a_checkpoint(process: subprocess.Popen, case: Case, directory: Path) -> None:
     """SIGKILL the orchestrator and its engine (one process group) once a checkpoint is usable."""
     adapter = get_adapter(case.engine.value)
+    plan = make_plan(case, directory.parent)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
-        if directory.exists() and checkpoint.usable(directory, adapter.checkpoint_ext, adapter.last_frame_step(case, directory)):
+        if directory.exists() and checkpoint.usable(directory, adapter.checkpoint_ext, adapter.last_frame_step(plan, directory)):
             break
         assert process.poll() is None, "the run ended before a checkpoint could be used"
         time.sleep(0.02)
@@ -182,7 +186,7 @@ def test_a_campaign_whose_dask_workers_are_killed_resumes_every_run(tmp_path: Pa
         cut: list[str] = []
         while time.monotonic() < deadline and not cut:
             points = list((out / "runs").glob("*")) if (out / "runs").exists() else []
-            cut = [p.name for p in points if checkpoint.usable(p, "restart", adapter.last_frame_step(case, p))]
+            cut = [p.name for p in points if checkpoint.usable(p, "restart", adapter.last_frame_step(make_plan(case, p), p))]
             time.sleep(0.02)
         assert cut, "no point reached a checkpoint"
         for pid in client.run(os.getpid).values():
@@ -251,10 +255,10 @@ class _Adapter:
     def __init__(self, last: int | None):
         self.last = last
 
-    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
+    def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
         return self.last
 
-    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         return checkpoint.usable(rundir, self.checkpoint_ext, last_frame_step)
 
 
@@ -272,13 +276,14 @@ def _cut_off(directory: Path, case: Case, status: str = "running", run_id: str |
 def test_only_a_cut_off_run_of_the_same_inputs_with_a_finished_checkpoint_resumes(tmp_path: Path) -> None:
     case = trap_case("cocd")
     _cut_off(tmp_path, case)
-    assert resume_point(case, tmp_path, _Adapter(last=120)) == Resume(1, 100, "checkpoint.100.npz")
-    assert resume_point(case, tmp_path, _Adapter(last=100)) == Resume(1, 50, "checkpoint.50.npz")  # 100 may be half written
-    assert resume_point(case, tmp_path, _Adapter(last=40)) is None
-    other = trap_case("cocd", duration=0.4)
+    plan = make_plan(case, tmp_path)
+    assert resume_point(plan, tmp_path, _Adapter(last=120)) == Resume(1, 100, "checkpoint.100.npz")
+    assert resume_point(plan, tmp_path, _Adapter(last=100)) == Resume(1, 50, "checkpoint.50.npz")  # 100 may be half written
+    assert resume_point(plan, tmp_path, _Adapter(last=40)) is None
+    other = make_plan(trap_case("cocd", duration=0.4), tmp_path)
     assert resume_point(other, tmp_path, _Adapter(last=120)) is None  # other inputs: start afresh
     _cut_off(tmp_path, case, status="failed")
-    assert resume_point(case, tmp_path, _Adapter(last=120)) is None
+    assert resume_point(plan, tmp_path, _Adapter(last=120)) is None
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -326,7 +331,8 @@ def test_writing_checkpoints_leaves_the_run_unchanged(engine: str, law: str, tmp
         directory = tmp_path / str(interval)
         directory.mkdir()
         adapter = get_adapter(engine, RunOptions(checkpoint_interval=interval))
-        adapter.write_input(case, tmp_path, directory)
-        adapter.execute(case, directory)
-        runs.append(adapter.read_output(case, directory))
+        plan = make_plan(case, tmp_path)
+        adapter.write_input(plan, directory)
+        adapter.execute(plan, directory)
+        runs.append(adapter.read_output(plan, directory))
     assert np.array_equal(runs[0].position, runs[1].position) and np.array_equal(runs[0].velocity, runs[1].velocity)

@@ -12,6 +12,7 @@ from orchestrator.engines.liggghts.adapter import LiggghtsAdapter
 from orchestrator.engines.yade.adapter import YadeAdapter
 from orchestrator.runner import RUN_RECORD, render_case, run_case
 
+from orchestrator.plan import make_plan
 from conftest import free_fall_case, requires_liggghts, requires_yade
 
 
@@ -23,7 +24,7 @@ def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
     deck = render_case(case, tmp_path, rundir)
     deck.write_text(deck.read_text().replace("pair_style      gran", "pair_style      grann"))
     with pytest.raises(EngineError) as caught:
-        LiggghtsAdapter().execute(case, rundir)
+        LiggghtsAdapter().execute(make_plan(case, tmp_path), rundir)
     message = str(caught.value)
     assert "ERROR" in message and "grann" in message, message
     assert str(deck) in message
@@ -39,7 +40,7 @@ def test_failing_yade_script_reports_traceback(tmp_path: Path) -> None:
     script = render_case(case, tmp_path, rundir)
     script.write_text(script.read_text().replace("O.dt = DT", "O.dt = DT / undefined_name"))
     with pytest.raises(EngineError) as caught:
-        YadeAdapter().execute(case, rundir)
+        YadeAdapter().execute(make_plan(case, tmp_path), rundir)
     assert "undefined_name" in str(caught.value)
     assert script.exists() and (rundir / "engine.log").exists()
 

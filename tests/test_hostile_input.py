@@ -17,7 +17,8 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from orchestrator import physics, preflight
+from orchestrator import physics
+from orchestrator.plan import make_plan
 from orchestrator.campaign import store
 from orchestrator.campaign.spec import CampaignSpec, evaluate, expand
 from orchestrator.case import CaseError, load_case, parse_case
@@ -174,7 +175,7 @@ def test_any_case_validates_or_raises_the_project_error(changes: dict[str, Any])
     started = time.perf_counter()
     try:
         case = parse_case(data)
-        preflight.check(case, Path("."))
+        make_plan(case, Path("."))
     except CaseError as error:
         assert "\n" not in str(error) and len(str(error)) < 2000
     assert time.perf_counter() - started < 2.0
@@ -195,7 +196,7 @@ def test_any_campaign_spec_validates_or_raises_the_project_error(spec: dict[str,
 
 def test_shipped_cases_pass_the_preflight_checks() -> None:
     for path in sorted((Path(__file__).parent.parent / "cases").glob("*.yaml")):
-        preflight.check(load_case(path), path.parent)
+        make_plan(load_case(path), path.parent)
 
 
 LEAVING = {"name": "leave", "time": {"step": 1.0e-5, "duration": 0.2, "output_interval": 0.01}, "gravity": [0.0, 0.0, 0.0],

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from orchestrator import parity
-from orchestrator.engines.registry import ENGINE_NAMES
+from orchestrator.capabilities import ENGINE_NAMES
 
 SKIP = {"liggghts": "liggghts", "yade": "yade"}  # engines that need a program on PATH (cocd is this package)
 PARAMS = [

@@ -163,11 +163,12 @@ def test_mpi_settings_reach_the_command_and_the_deck(tmp_path: Path, monkeypatch
     """MPI processes and the processor grid change how LIGGGHTS is launched and split, not the case.
     Precedence: the explicit option, then the environment, then a study's default split."""
     from orchestrator.engines import RunOptions, get_adapter
+    from orchestrator.plan import make_plan
 
     monkeypatch.setenv("DEMORCH_LIGGGHTS_MPI", "2")
     monkeypatch.delenv("DEMORCH_LIGGGHTS_GRID", raising=False)
     adapter = get_adapter("liggghts", RunOptions(default_grid="1 * 1"))
-    deck = adapter.write_input(sliding_case("liggghts"), tmp_path, tmp_path)
+    deck = adapter.write_input(make_plan(sliding_case("liggghts"), tmp_path), tmp_path)
     assert "processors      1 * 1" in deck.read_text()
     command = adapter.command(deck)
     assert command[command.index("-np") + 1] == "2"

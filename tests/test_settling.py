@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from orchestrator.post.summary import kinetic_energy
-from orchestrator.engines.registry import capabilities
+from orchestrator.capabilities import capabilities
 from orchestrator.results import Trajectory, read_results
 from orchestrator.runner import RESULTS, run_case
 

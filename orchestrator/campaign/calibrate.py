@@ -117,7 +117,7 @@ class Calibration:
         return parse_case(data, source=f"{self.spec.name} evaluation")
 
     def error_of(self, case: Case) -> float:
-        directory = store.run_dir(self.directory, store.run_id(case))
+        directory = store.run_dir(self.directory, store.run_id(case, self.base_dir))
         trajectory = read_results(directory / RESULTS)
         shape = case.shapes[0]
         sim = corners(trajectory, 0, corner_offsets(shape.length, shape.width, shape.thickness))
@@ -143,7 +143,7 @@ def evaluate_batch(calibration: Calibration, batch: list[np.ndarray], record: Ca
     cases = [calibration.case_for(values) for values in batch]
     todo = []
     for case in cases:
-        directory = store.run_dir(calibration.directory, store.run_id(case))
+        directory = store.run_dir(calibration.directory, store.run_id(case, calibration.base_dir))
         if store.status(directory) != "completed":
             if directory.exists():
                 store.retire(directory, calibration.directory)
@@ -154,7 +154,7 @@ def evaluate_batch(calibration: Calibration, batch: list[np.ndarray], record: Ca
             list(pool.map(perform, *zip(*todo)))
     errors = []
     for values, case in zip(batch, cases):
-        identifier = store.run_id(case)
+        identifier = store.run_id(case, calibration.base_dir)
         if store.status(store.run_dir(calibration.directory, identifier)) == "completed":
             error = calibration.error_of(case)
         else:

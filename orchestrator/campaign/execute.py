@@ -24,7 +24,8 @@ from orchestrator.campaign.spec import base_kind, expand, load_campaign
 from orchestrator.case import Case, CaseError
 from orchestrator.engines import RunOptions, get_adapter
 from orchestrator.engines.base import EngineError, die_with_parent
-from orchestrator.rundir import RUN_RECORD, write_json_atomic
+from orchestrator.plan import RunPlan, make_plan
+from orchestrator.rundir import RUN_RECORD
 from orchestrator.runner import RESULTS, resumable, run_locked
 from orchestrator.studies.base import RELEASE_DIR
 from orchestrator.studies.registry import study_kind
@@ -48,24 +49,34 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
             state = rundir.status(path, store.inputs_model(kind), held=True)
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
-            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, kind):
+            plan = _case_plan(point_json, Path(case_dir)) if kind == "case" else None
+            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, Path(case_dir), plan):
                 rundir.retire(path, path.parent.parent)
-            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options)
+            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options, plan)
     except rundir.Busy:
         return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
 
 
-def _continues(path: Path, kind: str) -> bool:
+def _case_plan(point_json: str, case_dir: Path) -> RunPlan | None:
+    """The plan of a case point, made once for the whole point (None: the case does not pass its
+    checks; running it records that)."""
+    try:
+        return make_plan(Case.model_validate_json(point_json), case_dir)
+    except (CaseError, ValueError):
+        return None
+
+
+def _continues(path: Path, case_dir: Path, plan: RunPlan | None) -> bool:
     """A point cut off mid-run that goes on from its checkpoint (a study point: its release's)."""
-    return resumable(path if kind == "case" else path / RELEASE_DIR)
+    return resumable(path, case_dir, plan) if plan is not None else resumable(path / RELEASE_DIR, path)
 
 
 def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float,
-                    options: RunOptions) -> dict[str, Any]:
+                    options: RunOptions, plan: RunPlan | None = None) -> dict[str, Any]:
     try:
         if kind == "case":
             case = Case.model_validate_json(point_json)
-            record = run_locked(case, case_dir, path, None, timeout, get_adapter(case.engine.value, options))
+            record = run_locked(case, case_dir, path, None, timeout, get_adapter(case.engine.value, options), plan)
         else:
             record = perform_study(kind, point_json, path, started, timeout, options)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
@@ -73,7 +84,7 @@ def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float 
         summary = error.summary if isinstance(error, EngineError) else str(error)
         if isinstance(error, CaseError) or kind != "case":
             tail = error.tail if isinstance(error, EngineError) else []
-            write_json_atomic(path / RUN_RECORD, {"status": "failed", "kind": kind, "error": summary, "log_tail": tail})
+            rundir.write_record(path, {"status": "failed", "kind": kind, "error": summary, "log_tail": tail})
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
 
 
@@ -91,7 +102,7 @@ def perform_study(kind_name: str, study_json: str, path: Path, started: float, t
     build = rundir.build_stamp(study.engine.value)
     rundir.save_inputs(path, study)
     report = kind.run(study, path, shared=path.parent.parent / kind.shared_dir, timeout=timeout, options=options)
-    release = rundir.read_json(path / "run" / RUN_RECORD) or {}
+    release = rundir.read_json(path / RELEASE_DIR / RUN_RECORD) or {}
     shared = report[kind.preparation]
     record = {
         "status": "completed",
@@ -106,7 +117,7 @@ def perform_study(kind_name: str, study_json: str, path: Path, started: float, t
         "preparation_reused": shared.get("reused"),
         "metrics": kind.metrics(report),
     }
-    write_json_atomic(path / RUN_RECORD, record)
+    rundir.write_record(path, record)
     return record
 
 
@@ -150,13 +161,14 @@ class Plan:
 def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
     spec, base = load_campaign(campaign_file)
     kind = base_kind(spec, base)
+    base_dir = (campaign_file.parent / spec.base).resolve().parent
     points, cases = {}, {}
     builds: dict[str, dict[str, Any]] = {}
     for parameters, case in expand(spec, base):
         engine = case.engine.value
         if engine not in builds:  # once per engine: it hashes the templates and the plugin sources
             builds[engine] = rundir.build_stamp(engine)
-        identifier = rundir.run_id(case, builds[engine])
+        identifier = rundir.run_id(case, builds[engine], case_dir=base_dir)
         points[identifier] = parameters
         cases[identifier] = case
     store.write_points(campaign_dir, points)
@@ -167,7 +179,6 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
             to_run.append(identifier)
         else:
             skipped[identifier] = state
-    base_dir = (campaign_file.parent / spec.base).resolve().parent
     return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
 
 

@@ -26,15 +26,16 @@ from orchestrator.studies.registry import study_kind
 
 RUNS = "runs"
 POINTS = "points.json"
+LATEST = "latest.json"  # the run ids of the newest launch's points: every other point is superseded
 INDEX = "index.parquet"
 CAMPAIGN_LOCK = ".campaign.lock"
 
 __all__ = ["RUNS", "POINTS", "INDEX", "run_id", "run_dir", "status", "retire", "write_points", "build_index", "campaign_lock"]
 
 
-def run_id(point: BaseModel) -> str:
-    """The run id of a case or study point (rundir.run_id)."""
-    return rundir.run_id(point)
+def run_id(point: BaseModel, case_dir: Path | None = None) -> str:
+    """The run id of a case or study point (rundir.run_id; files it names are relative to case_dir)."""
+    return rundir.run_id(point, case_dir=case_dir)
 
 
 def run_dir(campaign_dir: Path, identifier: str) -> Path:
@@ -69,25 +70,44 @@ def campaign_lock(campaign_dir: Path) -> Iterator[None]:
 
 
 def write_points(campaign_dir: Path, points: dict[str, dict[str, Any]]) -> None:
-    """Add points (run id → varied parameters) to points.json; points already there are kept."""
+    """Add points (run id → varied parameters) to points.json, and make them the latest launch's
+    (latest.json). Points already there are kept: an edited base case or a new build gives new ids,
+    and the index then shows the older points as superseded."""
     path = campaign_dir / POINTS
     with campaign_lock(campaign_dir):
         known = rundir.read_json(path) or {}
         known.update(points)
-        temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        temporary.write_text(json.dumps(known, indent=1, sort_keys=True))
-        os.replace(temporary, path)
+        _write(path, json.dumps(known, indent=1, sort_keys=True))
+        _write(campaign_dir / LATEST, json.dumps({"run_ids": sorted(points)}, indent=1))
+
+
+def _write(path: Path, text: str) -> None:
+    temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    temporary.write_text(text)
+    os.replace(temporary, path)
+
+
+def latest_ids(campaign_dir: Path) -> set[str] | None:
+    """The run ids of the newest launch's points (None: a campaign directory from before latest.json)."""
+    latest = rundir.read_json(campaign_dir / LATEST)
+    ids = latest.get("run_ids") if isinstance(latest, dict) else None
+    return set(ids) if isinstance(ids, list) else None
 
 
 def build_index(campaign_dir: Path) -> pd.DataFrame:
-    """One row per run: parameters, status, timings, versions and every scalar metric; saved as parquet."""
+    """One row per run: parameters, status, timings, versions and every scalar metric; saved as parquet.
+
+    A point the newest launch no longer has (its base case, a file it names or the build changed
+    since) is `stale` with `superseded` true, whatever its own run says: one current row per point."""
     points = rundir.read_json(campaign_dir / POINTS) or {}
+    latest = latest_ids(campaign_dir)
     rows = []
     for identifier, parameters in points.items():
         if not isinstance(parameters, dict) or not all(c.isalnum() for c in identifier):
             continue  # a damaged points.json: its run ids are hex digits, its parameters a mapping
         directory = run_dir(campaign_dir, identifier)
-        row: dict[str, Any] = {"run_id": identifier, "status": status(directory)}
+        superseded = latest is not None and identifier not in latest
+        row: dict[str, Any] = {"run_id": identifier, "status": "stale" if superseded else status(directory), "superseded": superseded}
         row.update({f"param.{k}": v for k, v in parameters.items()})
         record = rundir.read_json(directory / RUN_RECORD)
         if record is not None:

@@ -13,7 +13,7 @@ from orchestrator.case import CaseError
 from orchestrator.validation import with_engine
 from orchestrator.cli.common import REPO_ROOT, console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
-from orchestrator.results import read_results
+from orchestrator.results import RELEASE_DIR, read_results
 from orchestrator.runner import RESULTS
 
 DEMO_STUDY = REPO_ROOT / "cases" / "avalanche" / "small.yaml"
@@ -24,7 +24,7 @@ def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -
     from orchestrator.studies.avalanche import report as pictures
     from orchestrator.studies.avalanche.study import BrickSpec, load_reference
 
-    trajectory = read_results(outdir / "run" / RESULTS)
+    trajectory = read_results(outdir / RELEASE_DIR / RESULTS)
     figures = outdir / "report"
     figures.mkdir(exist_ok=True)
     brick = BrickSpec.model_validate(report["study"]["brick"]).build()

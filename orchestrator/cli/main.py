@@ -27,26 +27,25 @@ from orchestrator.cli.schema import schema_command
 from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
-from orchestrator import preflight
+from orchestrator.plan import make_plan
 from orchestrator.post import summary as metrics
-from orchestrator.results import read_results
+from orchestrator.results import REPORT, RUN_RECORD, read_results
 from orchestrator.rundir import read_json
 from orchestrator.validation import bounded
 from orchestrator.runner import RESULTS, render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
-from orchestrator import physics
 
 
 def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
     try:
         case = with_engine(load_case(case_path), engine)
-        preflight.check(case, case_path.parent)  # before the progress bar: a bad case is one line
+        plan = make_plan(case, case_path.parent)  # the pre-flight checks, before the progress bar: a bad case is one line
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
-        resume = None if rundir_lock_held(rundir) else resume_point(case, rundir)
+        resume = None if rundir_lock_held(rundir) else resume_point(plan, rundir)
         if resume is not None:
-            console.print(f"{rundir}: resuming from the checkpoint at t = {resume.step * physics.schedule(case).dt:.4g} s "
+            console.print(f"{rundir}: resuming from the checkpoint at t = {resume.step * plan.schedule.dt:.4g} s "
                           f"(segment {resume.segment}; the run was cut off)")
         with Progress(
             TextColumn(f"[bold]{case.name}[/] on {case.engine.value}"),
@@ -58,7 +57,8 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
             transient=False,
         ) as progress:
             task = progress.add_task("starting", total=case.time.duration)
-            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout, options=run_options())
+            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout, options=run_options(),
+                              plan=plan)
     except CaseError as error:
         fail(str(error))
     except EngineError as error:
@@ -129,8 +129,8 @@ def post(rundir: Path, as_json: bool) -> None:
 
 
 def _post(rundir: Path, as_json: bool) -> None:
-    if (rundir / "report.json").exists():
-        report = json.loads((rundir / "report.json").read_text())
+    if (rundir / REPORT).exists():
+        report = json.loads((rundir / REPORT).read_text())
         page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
         if as_json:
             console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
@@ -140,7 +140,7 @@ def _post(rundir: Path, as_json: bool) -> None:
         return
     path = rundir / RESULTS
     if not path.exists():
-        record = read_json(rundir / "run.json") or {}
+        record = read_json(rundir / RUN_RECORD) or {}
         fail(f"{rundir} has no {RESULTS} (run status: {bounded(str(record.get('status', 'unknown')), 40)})")
     trajectory = read_results(path)
     values = metrics.summary(trajectory)

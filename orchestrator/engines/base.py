@@ -18,10 +18,8 @@ from typing import Callable, Protocol
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from orchestrator.case import Case
-    from orchestrator.engines.checkpoint import Resume
     from orchestrator.engines.options import RunOptions
-    from orchestrator.physics import Schedule
+    from orchestrator.plan import RunPlan
 from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
@@ -62,9 +60,14 @@ class EngineInfo:
 
 
 class EngineAdapter(Protocol):
+    """An engine behind one stateless interface: every per-run input arrives as a RunPlan
+    (orchestrator.plan) and a directory; the adapter itself holds only how the engine runs (its
+    executable, MPI processes, checkpoint interval: the RunOptions), so one instance serves any
+    number of runs, in any order."""
+
     name: str
-    # What the engine cannot do exactly for the case of the last write_input (recorded in run.json).
-    warnings: tuple[str, ...]
+    # The engine's checkpoint files are checkpoint.<step>.<ext> (engines.checkpoint); None: it writes none.
+    checkpoint_ext: str | None
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "EngineAdapter":
@@ -75,44 +78,42 @@ class EngineAdapter(Protocol):
 
     def build_inputs(self) -> dict[str, str]:
         """Hashes of what turns a case into engine steps besides the engine itself: the deck templates
-        or runner program (`inputs`), a compiled plugin (`plugin`). Part of every run id."""
+        and the code that writes and reads them (`inputs`), a compiled plugin (`plugin`). Part of every run id."""
         ...
 
-    # The engine's checkpoint files are checkpoint.<step>.<ext> (engines.checkpoint); None: it writes none.
-    checkpoint_ext: str | None
-
-    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
-        """Render the deck (and its data files) into rundir; return the deck path. resume: continue a
-        cut-off run from that checkpoint (the deck of a new segment)."""
+    def warnings(self, plan: RunPlan) -> tuple[str, ...]:
+        """What the engine cannot do exactly for this plan's case (recorded in run.json)."""
         ...
 
-    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
-        """Run the deck of the last write_input; its log is that segment's."""
+    def write_input(self, plan: RunPlan, rundir: Path) -> Path:
+        """Render the deck (and its data files) of the plan's segment into rundir; return the deck path."""
         ...
 
-    def read_output(self, case: Case, rundir: Path) -> Trajectory:
+    def execute(self, plan: RunPlan, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        """Run the deck of the plan's segment (written by write_input); its log is that segment's."""
+        ...
+
+    def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
         """Every frame of every segment, once (engines.checkpoint.merge)."""
         ...
 
-    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
+    def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
         """The step of the newest frame written by any segment (None: none yet)."""
         ...
 
-    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         """(step, path) of the checkpoints a cut-off run whose newest frame is at last_frame_step
         may continue from, oldest first."""
         ...
 
 
 class AdapterDefaults:
-    """What most adapters share: the run options kept for checkpoints, the templates as build inputs,
-    no warnings, one segment until a resume."""
+    """What most adapters share: the run options kept for checkpoints, the code that makes the deck
+    as build inputs, no warnings."""
 
     name: str
-    warnings: tuple[str, ...] = ()  # an adapter that has some sets its own in write_input
     checkpoint_ext: str | None = None
     options: RunOptions | None = None  # None: the defaults (environment, else a checkpoint per tenth of the run)
-    segment: int = 0  # of the last write_input
 
     @classmethod
     def from_options(cls, options: RunOptions) -> "AdapterDefaults":
@@ -120,25 +121,31 @@ class AdapterDefaults:
         adapter.options = options
         return adapter
 
-    def checkpoint_steps(self, case: Case, plan: Schedule) -> int | None:
-        """Steps between checkpoints for this case (None: none), from the run options."""
+    def warnings(self, plan: RunPlan) -> tuple[str, ...]:
+        return ()
+
+    def checkpoint_steps(self, plan: RunPlan) -> int | None:
+        """Steps between checkpoints for this plan (None: none), from the run options."""
         from orchestrator.engines.options import RunOptions
 
         if self.checkpoint_ext is None:
             return None
-        return (self.options or RunOptions()).checkpoint_steps(case.time.duration, plan.dt, plan.output_every, plan.total_steps)
+        schedule = plan.schedule
+        return (self.options or RunOptions()).checkpoint_steps(plan.case.time.duration, schedule.dt, schedule.output_every,
+                                                               schedule.total_steps)
 
-    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
         from orchestrator.engines import checkpoint
 
         return checkpoint.usable(rundir, self.checkpoint_ext or "", last_frame_step)
 
-    def log_name(self) -> str:
-        """The engine log of the current segment: engine.log, engine.1.log, …"""
+    @staticmethod
+    def log_name(plan: RunPlan) -> str:
+        """The engine log of the plan's segment: engine.log, engine.1.log, …"""
         from orchestrator.engines.checkpoint import segment_name
 
-        return segment_name(LOG_NAME, self.segment)
+        return segment_name(LOG_NAME, plan.segment)
 
     def build_inputs(self) -> dict[str, str]:
         from orchestrator.engines.templating import template_hash

@@ -16,24 +16,14 @@ ones are deleted (`prune`).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence, TypeVar
+
+from orchestrator.plan import Resume  # noqa: F401  (where a continued run starts; re-exported)
 
 KEEP = 2
 _CHECKPOINT = re.compile(r"^checkpoint\.(\d+)\.(.+)$")
 Frame = TypeVar("Frame")
-
-
-@dataclass(frozen=True)
-class Resume:
-    """Where a continued run starts: its segment number, the checkpoint's step and file (a name in
-    the run directory), and the step of the newest frame the cut-off run had written."""
-
-    segment: int
-    step: int
-    file: str
-    reached_step: int | None = field(default=None, compare=False)
 
 
 def segment_name(name: str, segment: int) -> str:

@@ -1,34 +1,19 @@
-"""Engine-neutral preparation shared by the adapters: schedule, pair constants, wall triangles, domain."""
+"""What the adapters share once a run is planned (orchestrator.plan): pair matrices, frame streams, the rest marker."""
 
 from __future__ import annotations
 
-import subprocess
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from orchestrator import geometry, physics
-from orchestrator.case import Case, Domain
+from orchestrator import physics
+from orchestrator.case import Case
+from orchestrator.plan import RunPlan
 from orchestrator.results import Trajectory
 
 
-@dataclass(frozen=True)
-class Prepared:
-    schedule: physics.Schedule
-    pairs: list[physics.PairConstants]
-    wall_triangles: list[np.ndarray]
-    domain: Domain
-
-
-def prepare(case: Case, case_dir: Path, dashpot_for_bilinear: bool = False) -> Prepared:
-    plan = physics.schedule(case)
-    triangles = [geometry.wall_triangles(wall, case_dir) for wall in case.walls]
-    domain = case.domain or geometry.automatic_domain(case, triangles, plan.end_time)
-    return Prepared(schedule=plan, pairs=physics.pair_constants(case, dashpot_for_bilinear), wall_triangles=triangles, domain=domain)
-
-
-def pair_matrices(case: Case, pairs: list[physics.PairConstants]) -> dict[str, list[float]]:
+def pair_matrices(case: Case, pairs: Sequence[physics.PairConstants]) -> dict[str, list[float]]:
     """Row-major n×n matrices (n = number of materials) of every pair constant.
 
     Pairs that can never touch (wall/wall) take the first listed pair's values: an engine
@@ -46,42 +31,7 @@ def pair_matrices(case: Case, pairs: list[physics.PairConstants]) -> dict[str, l
     return matrices
 
 
-def body_materials(case: Case) -> np.ndarray:
-    """Material of each body, in body order (both engines number bodies in case order)."""
-    return np.array([b.material for b in physics.bodies(case)])
-
-
-def body_masses(case: Case) -> np.ndarray:
-    """Exact body masses from the case (dumps print fewer digits than the engines compute with)."""
-    return np.array([b.mass for b in physics.bodies(case)])
-
-
-def moving_mass(case: Case) -> float:
-    """Total mass of the bodies that can move (glued spheres left out): the M of the rest criterion."""
-    glued = [s.fixed for s in case.bodies.spheres] + [False] * len(case.bodies.clumps)
-    return float(sum(mass for mass, fixed in zip(body_masses(case), glued) if not fixed))
-
-
-def body_inertia(case: Case) -> np.ndarray:
-    return np.array([b.inertia for b in physics.bodies(case)])
-
-
 AT_REST_MARKER = "DEMORCH_AT_REST"
-
-
-def rest_settings(case: Case, plan: physics.Schedule) -> dict[str, float | None] | None:
-    """What a YADE script or cocd deck needs to stop at rest: check period and first step (whole output
-    intervals), the speed threshold, the moving mass M and the stray fraction (None: the RMS criterion).
-    None: run the whole duration."""
-    checks = physics.rest_check_steps(case, plan)
-    if checks is None:
-        return None
-    every, after = checks
-    rest = case.time.stop_at_rest
-    # The first check: at `after`, or at the last wall removal if later (a release's trap opening).
-    first = max([after, *physics.removal_steps(case, plan).values()])
-    return {"every": every, "after": after, "first": first, "speed": rest.speed, "mass": moving_mass(case),
-            "stray_fraction": rest.stray_fraction}
 
 
 def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
@@ -142,32 +92,23 @@ def last_stream_step(rundir: Path, name: str, dt: float) -> int | None:
     return round(times[-1] / dt) if times else None
 
 
-def package_version(package: str) -> str | None:
-    """The installed version of a Debian package (dpkg-query), or None."""
-    try:
-        result = subprocess.run(["dpkg-query", "-W", "-f=${Version}", package], capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    return result.stdout.strip() or None
-
-
-def frame_stream_trajectory(case: Case, rundir: Path, frames_name: str, deck: Path, engine: str, orientation_tracked: bool) -> Trajectory:
+def frame_stream_trajectory(plan: RunPlan, rundir: Path, frames_name: str, deck: Path, engine: str, orientation_tracked: bool) -> Trajectory:
     """The Trajectory of a run whose engine appended (time, (bodies, 16) rows) frames with numpy.save:
     id, mass, radius, position, velocity, angular velocity, orientation (w, x, y, z)."""
-    from orchestrator.engines.base import EngineError
+    from orchestrator.engines.base import LOG_NAME, EngineError
 
-    dt = physics.schedule(case).dt
+    dt = plan.schedule.dt
     times, rows = read_segment_frames(rundir, frames_name, dt)
     if not rows:
-        raise EngineError(f"{engine} wrote no frames", deck, rundir / "engine.log")
+        raise EngineError(f"{engine} wrote no frames", deck, rundir / LOG_NAME)
     stack = np.stack(rows)
     return Trajectory(
         time=np.asarray(times),
         ids=stack[0, :, 0].astype(np.int64),
-        material=body_materials(case),
+        material=plan.materials(),
         mass=stack[0, :, 1].copy(),
         radius=stack[0, :, 2].copy(),
-        inertia=body_inertia(case),
+        inertia=plan.inertia(),
         position=stack[:, :, 3:6],
         velocity=stack[:, :, 6:9],
         angular_velocity=stack[:, :, 9:12],

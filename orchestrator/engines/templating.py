@@ -11,7 +11,6 @@ and no engine has safe-rendering code of its own.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -101,16 +100,10 @@ def render(engine: str, template: str, context: dict[str, Any]) -> str:
 
 
 def template_hash(engine: str) -> str:
-    """sha256 over what turns a case into an engine's deck, recorded in run.json to tie results to
-    decks: the engine's templates, its adapter package (the deck writer, YADE's stand-in constants)
-    and the engine-neutral numbers they use (physics.py, engines/common.py). cocd has no template:
-    its deck is data, and its package holds the solver that turns it into steps."""
-    package = Path(__file__).resolve().parent
-    files = [*sorted((package / engine).rglob("*.py")), package / "common.py", package.parent / "physics.py"]
-    if engine != "cocd":
-        files += sorted(path for path in (template_root() / engine).rglob("*") if path.is_file())
-    digest = hashlib.sha256()
-    for path in files:
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """sha256 over what turns a case into an engine's deck, recorded in every run id: the code that
+    writes, runs and reads it (engines.build: the import closure of the engine's package) and the
+    engine's templates. cocd has no template: its deck is data, its runner program is code."""
+    from orchestrator.engines.build import deck_hash
+
+    directory = template_root() / engine
+    return deck_hash(engine, directory if directory.is_dir() else None)

@@ -23,11 +23,10 @@ from pydantic import BaseModel
 
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions
-from orchestrator.results import Trajectory, read_results
+from orchestrator.results import RELEASE_DIR, REPORT, Trajectory, read_results  # noqa: F401  (the study layout, re-exported)
 from orchestrator.runner import RESULTS, ensure_run, run_case
 
-REPORT = "report.json"
-RELEASE_DIR = "run"
+
 
 StageProgress = Callable[[str], Callable[[float, float], None] | None]
 

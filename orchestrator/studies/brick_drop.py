@@ -28,7 +28,7 @@ import numpy as np
 
 from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.case import Case, parse_case
-from orchestrator.results import RESULTS, Trajectory, read_results
+from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
 from orchestrator.studies.avalanche.study import BrickSpec, load_reference
 
@@ -166,9 +166,9 @@ def tilted_metrics(drop: Drop) -> dict[str, Any]:
 def measure_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> tuple[dict[str, Any], Drop]:
     """Run one drop in `directory`: its metrics (flat_metrics or tilted_metrics) and its Drop."""
     case = drop_case(engine, shape, constants, tilted)
-    run_case(case, directory, directory / "run")
+    run_case(case, directory, directory / RELEASE_DIR)
     clump = case.shape(shape["name"]).clump(case.material("brick").density)
-    drop = Drop.from_trajectory(read_results(directory / "run" / RESULTS), clump)
+    drop = Drop.from_trajectory(read_results(directory / RELEASE_DIR / RESULTS), clump)
     return (tilted_metrics(drop) if tilted else flat_metrics(drop)), drop
 
 

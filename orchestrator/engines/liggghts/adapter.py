@@ -10,19 +10,20 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator import physics
-from orchestrator.case import Case, ContactLaw
+from orchestrator.case import ContactLaw
+from orchestrator.plan import RunPlan
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.options import RunOptions
 from orchestrator.engines.liggghts import deck, plugin
 from orchestrator.engines.liggghts.deck import (CHECKPOINT_EXT, CLUMP_COLUMNS, CONTACT_PAIRS_NAME, CONTACT_WALLS_NAME, DECK_NAME, DUMP_NAME, INSTALL_HINT,
-                                                SPHERE_COLUMNS, TEXT_DUMP_NAME)
+                                                SPHERE_COLUMNS, TEXT_DUMP_NAME, spheres_per_clump)
 from orchestrator.engines.liggghts.dump import (binary_dump_steps, clump_states, contact_rows, read_binary_dump, read_dump, read_local_dump,
                                                 sphere_states)
 from orchestrator.engines import checkpoint
-from orchestrator.engines.checkpoint import Resume, segment_name
-from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
+from orchestrator.engines.checkpoint import segment_name
+from orchestrator.engines.build import engine_version
+from orchestrator.engines.base import LOG_NAME, AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
 
@@ -90,15 +91,13 @@ class LiggghtsAdapter(AdapterDefaults):
         return EngineInfo(
             name=self.name,
             executable=shutil.which(self.executable),
-            version=common.package_version("liggghts"),
+            version=engine_version(shutil.which(self.executable), ("-h",), r"LIGGGHTS \(Version ([^,)]+)"),
             install_hint=INSTALL_HINT,
         )
 
     # -- input -----------------------------------------------------------------------------
-    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
-        self.segment = resume.segment if resume else 0
-        return deck.write_deck(case, case_dir, rundir, self.processor_grid, self.max_bins, self.skin_radii,
-                               self.checkpoint_steps(case, physics.schedule(case)), resume)
+    def write_input(self, plan: RunPlan, rundir: Path) -> Path:
+        return deck.write_deck(plan, rundir, self.processor_grid, self.max_bins, self.skin_radii, self.checkpoint_steps(plan))
 
     # -- run -------------------------------------------------------------------------------
     def command(self, deck: Path) -> list[str]:
@@ -114,11 +113,11 @@ class LiggghtsAdapter(AdapterDefaults):
             return [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(self.mpi_processes), *base]
         return base
 
-    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
-        deck = rundir / segment_name(DECK_NAME, self.segment)
-        log = rundir / self.log_name()
-        plan = physics.schedule(case)
-        dt, total = plan.dt, plan.total_steps
+    def execute(self, plan: RunPlan, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        case = plan.case
+        deck = rundir / segment_name(DECK_NAME, plan.segment)
+        log = rundir / self.log_name(plan)
+        dt, total = plan.schedule.dt, plan.schedule.total_steps
         # A checkpoint before a thermo line is complete (LIGGGHTS writes restart files before thermo).
         watcher = ThermoWatcher(dt, lambda step: checkpoint.prune(rundir, CHECKPOINT_EXT, step))
         env = dict(os.environ)
@@ -128,7 +127,7 @@ class LiggghtsAdapter(AdapterDefaults):
                           log_name=log.name)
         if watcher.first_atoms is not None and watcher.last_atoms is not None and watcher.last_atoms < watcher.first_atoms:
             lost = watcher.first_atoms - watcher.last_atoms
-            what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {deck.spheres_per_clump(case)})"
+            what = f"{lost} spheres" if not case.bodies.clumps else f"{lost} spheres (clumps of {spheres_per_clump(case)})"
             raise EngineError(
                 f"{what} left the simulation domain by step {watcher.last_step}; enlarge `domain:` in the case",
                 deck,
@@ -140,16 +139,17 @@ class LiggghtsAdapter(AdapterDefaults):
             raise EngineError(f"the run stopped at step {watcher.last_step} of {total}", deck, log, tail)
 
     # -- output ----------------------------------------------------------------------------
-    def read_output(self, case: Case, rundir: Path) -> Trajectory:
+    def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
+        case = plan.case
         deck = rundir / DECK_NAME
-        dt = physics.schedule(case).dt
+        dt = plan.schedule.dt
         if (rundir / DUMP_NAME).exists():
             columns = list(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
             steps, frames = checkpoint.merge([read_binary_dump(path, len(columns)) for path in checkpoint.segment_files(rundir, DUMP_NAME)])
         else:
             steps, columns, frames = read_dump(rundir / TEXT_DUMP_NAME)
         if not frames:
-            raise EngineError("the engine wrote no dump frames", deck, rundir / "engine.log")
+            raise EngineError("the engine wrote no dump frames", deck, rundir / LOG_NAME)
         column = {name: i for i, name in enumerate(columns)}
         if "id_multisphere" in column:
             position, velocity, spin, orientation, atom_slot = clump_states(case, column, frames)
@@ -163,39 +163,38 @@ class LiggghtsAdapter(AdapterDefaults):
         return Trajectory(
             time=np.asarray(steps, dtype=float) * dt,
             ids=ids,
-            material=common.body_materials(case),
-            mass=common.body_masses(case),
-            radius=np.array([b.radius for b in physics.bodies(case)]),
-            inertia=common.body_inertia(case),
+            material=plan.materials(),
+            mass=plan.masses(),
+            radius=plan.radii(),
+            inertia=plan.inertia(),
             position=position,
             velocity=velocity,
             angular_velocity=spin,
             orientation=orientation,
             attrs={"orientation_tracked": "id_multisphere" in column, **common.at_rest_attrs(rundir, dt)},
-            contacts=self.read_contacts(case, rundir, steps, atom_slot) if case.record_contacts else None,
+            contacts=self.read_contacts(plan, rundir, steps, atom_slot) if case.record_contacts else None,
         )
 
     @staticmethod
-    def read_contacts(case: Case, rundir: Path, steps: list[int], atom_slot: np.ndarray) -> Contacts:
+    def read_contacts(plan: RunPlan, rundir: Path, steps: list[int], atom_slot: np.ndarray) -> Contacts:
         """The contacts of each dumped frame (steps), from the deck's two `dump local` files. A wall's
         mesh number is its place among the walls present at that step (removed walls leave `fix walls`)."""
         pairs, walls = (_merged_local_dumps(rundir, name) for name in (CONTACT_PAIRS_NAME, CONTACT_WALLS_NAME))
-        removal = physics.removal_steps(case, physics.schedule(case))
         frames = []
         for step in steps:
-            present = [i for i, wall in enumerate(case.walls) if removal.get(wall.name, step) >= step]
+            present = [i for i, wall in enumerate(plan.case.walls) if plan.removals.get(wall.name, step) >= step]
             frames.append(contact_rows(pairs.get(step), walls.get(step), atom_slot, present))
         return Contacts.from_frames(frames)
 
-    def usable_checkpoints(self, case: Case, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
         """Not those at a wall removal step: LIGGGHTS rebuilds its wall fix there, and a run
         continued from that instant departs from the uninterrupted one (measured 2026-11-30: 1e-7 m,
         2.5e-4 m/s on spheres resting on the wall that stays); from any other step it is exact."""
-        removals = set(physics.removal_steps(case, physics.schedule(case)).values())
-        return [(step, path) for step, path in super().usable_checkpoints(case, rundir, last_frame_step) if step not in removals]
+        removals = set(plan.removals.values())
+        return [(step, path) for step, path in super().usable_checkpoints(plan, rundir, last_frame_step) if step not in removals]
 
-    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
-        columns = len(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
+    def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
+        columns = len(CLUMP_COLUMNS if plan.case.bodies.clumps else SPHERE_COLUMNS)
         pieces = [binary_dump_steps(path, columns) for path in checkpoint.segment_files(rundir, DUMP_NAME)]
         steps, _ = checkpoint.merge([(piece, piece) for piece in pieces])
         return steps[-1] if steps else None

@@ -8,10 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator import geometry, physics
+from orchestrator import geometry
 from orchestrator.case import Case, Domain
 from orchestrator.engines import common
-from orchestrator.engines.checkpoint import Resume, segment_name
+from orchestrator.engines.checkpoint import segment_name
+from orchestrator.plan import RunPlan
 from orchestrator.engines.templating import render
 
 DECK_NAME = "in.liggghts"
@@ -153,63 +154,63 @@ def link_initial_state(source: Path, target: Path) -> None:
     shutil.copyfile(source, target)
 
 
-def run_segments(case: Case, plan: physics.Schedule, start: int = 0) -> list[dict[str, object]]:
+def run_segments(plan: RunPlan, start: int = 0) -> list[dict[str, object]]:
     """Consecutive `run`s up to each wall removal step (`end`), each followed by the walls removed
     then, from step `start` on (a continued run: the removals due at or before its checkpoint are
     done already, walls_at)."""
-    removals = physics.removal_steps(case, plan)
-    remaining = [wall.name for wall in case.walls]
+    removals = plan.removals
+    remaining = [wall.name for wall in plan.case.walls]
     segments, done = [], 0
     for step in sorted(set(removals.values())):
         removed = [name for name, at in removals.items() if at == step]
         remaining = [name for name in remaining if name not in removed]
         segments.append({"steps": step - max(done, start), "end": step, "remove": removed, "remaining": remaining})
         done = step
-    segments.append({"steps": plan.total_steps - max(done, start), "end": plan.total_steps, "remove": [], "remaining": remaining})
-    return [segment for segment in segments if segment["end"] > start or segment["end"] == plan.total_steps]
+    total = plan.schedule.total_steps
+    segments.append({"steps": total - max(done, start), "end": total, "remove": [], "remaining": remaining})
+    return [segment for segment in segments if segment["end"] > start or segment["end"] == total]
 
 
-def walls_at(case: Case, plan: physics.Schedule, step: int) -> list[str]:
+def walls_at(plan: RunPlan, step: int) -> list[str]:
     """The walls a run from `step` starts with: those not removed at or before it (a continued run
     starts with the removals due at its checkpoint done)."""
-    removals = physics.removal_steps(case, plan)
-    return [wall.name for wall in case.walls if step == 0 or removals.get(wall.name, step + 1) > step]
+    return [wall.name for wall in plan.case.walls if step == 0 or plan.removals.get(wall.name, step + 1) > step]
 
 
-def rest_context(case: Case, plan: physics.Schedule, last_segment_steps: int) -> dict[str, object] | None:
+def rest_context(plan: RunPlan, last_segment_steps: int) -> dict[str, object] | None:
     """The deck's stop-at-rest runs over the last segment: up to the first check, whole chunks between
     checks, then the remainder to the end (None: one `run`). A continued run's last segment starts at
     its checkpoint, and its first check is the next one due (checks stay where they were)."""
-    rest = common.rest_settings(case, plan)
-    if rest is None:
+    if plan.rest is None:
         return None
-    start = plan.total_steps - last_segment_steps  # the last segment starts at the last wall removal (or the checkpoint)
+    rest = plan.rest.as_dict()
+    start = plan.schedule.total_steps - last_segment_steps  # the last segment starts at the last wall removal (or the checkpoint)
     due = rest["first"] if start <= rest["first"] else rest["first"] + math.ceil((start - rest["first"]) / rest["every"]) * rest["every"]
     first = min(due - start, last_segment_steps)  # steps from there to the first check
     chunks, remainder = divmod(last_segment_steps - first, rest["every"])
     return {**rest, "first": first, "chunks": chunks, "remainder": remainder, "speed_squared": float(rest["speed"]) ** 2}
 
 
-def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "* * *", max_bins: float = MAX_BINS,
-               skin_radii: float = SKIN_RADII, checkpoint_every: int | None = None, resume: Resume | None = None) -> Path:
-    """The data file, wall meshes and deck of `case` in rundir; returns the deck path.
+def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_bins: float = MAX_BINS,
+               skin_radii: float = SKIN_RADII, checkpoint_every: int | None = None) -> Path:
+    """The data file, wall meshes and deck of the plan's segment in rundir; returns the deck path.
 
-    checkpoint_every: steps between checkpoint files (None: none). resume: continue from that
-    checkpoint (a deck of its own, in.<segment>.liggghts, writing its own frame files)."""
-    prepared = common.prepare(case, case_dir)
+    checkpoint_every: steps between checkpoint files (None: none). A plan that resumes continues from
+    its checkpoint (a deck of its own, in.<segment>.liggghts, writing its own frame files)."""
+    case, resume = plan.case, plan.resume
     types = {name: index + 1 for index, name in enumerate(m.name for m in case.materials)}
     start = resume.step if resume else 0
-    walls = write_meshes(case, prepared, types, rundir, walls_at(case, prepared.schedule, start))
-    write_data(case, prepared, types, rundir / DATA_NAME)
+    walls = write_meshes(plan, types, rundir, walls_at(plan, start))
+    write_data(plan, types, rundir / DATA_NAME)
     if case.initial_state:
-        link_initial_state(case_dir / case.initial_state, rundir / INITIAL_STATE_NAME)
+        link_initial_state(plan.case_dir / case.initial_state, rundir / INITIAL_STATE_NAME)
     gravity = np.asarray(case.gravity, dtype=float)
     magnitude = float(np.linalg.norm(gravity))
     direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
     fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
     glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
-    segments = run_segments(case, prepared.schedule, start)
-    segment = resume.segment if resume else 0
+    segments = run_segments(plan, start)
+    segment = plan.segment
     radius_max = float(max(_sphere_radii(case)))
     skin = skin_radii * radius_max
     context = {
@@ -217,7 +218,7 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "processors": [int(p) if p != "*" else None for p in processor_grid.split()],
         "materials": [{"name": name, "type": t} for name, t in types.items()],
         "n_types": len(types),
-        "matrix": common.pair_matrices(case, prepared.pairs),
+        "matrix": common.pair_matrices(case, plan.pairs),
         "law": case.law.value,
         "data_file": DATA_NAME,
         "dump_file": segment_name(DUMP_NAME, segment),
@@ -229,8 +230,8 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "resume": {"file": resume.file, "step": resume.step} if resume else None,
         "skin": skin,
         "contact_distance_factor": CONTACT_DISTANCE_FACTOR,
-        "binsize": bin_size(prepared.domain, cutoff=2.0 * radius_max + skin, max_bins=max_bins),
-        "dt": prepared.schedule.dt,
+        "binsize": bin_size(plan.domain, cutoff=2.0 * radius_max + skin, max_bins=max_bins),
+        "dt": plan.schedule.dt,
         "gravity_magnitude": magnitude,
         "gravity_direction": [float(v) for v in direction],
         "walls": walls,
@@ -238,11 +239,11 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
         "glued_ids": id_ranges(glued) if glued else "",
         "planar": case.planar,
         **clump_context(case, types),
-        "output_every": prepared.schedule.output_every,
-        "thermo_every": max(1, min(prepared.schedule.output_every, prepared.schedule.total_steps // 100)),
-        "total_steps": prepared.schedule.total_steps,
+        "output_every": plan.schedule.output_every,
+        "thermo_every": max(1, min(plan.schedule.output_every, plan.schedule.total_steps // 100)),
+        "total_steps": plan.schedule.total_steps,
         "segments": segments,
-        "rest": rest_context(case, prepared.schedule, segments[-1]["steps"]),
+        "rest": rest_context(plan, segments[-1]["steps"]),
         "initial_state": INITIAL_STATE_NAME if case.initial_state else "",
         "save_state": case.save_state,
         "state_file": STATE_NAME,
@@ -252,12 +253,12 @@ def write_deck(case: Case, case_dir: Path, rundir: Path, processor_grid: str = "
     return deck
 
 
-def write_meshes(case: Case, prepared: "common.Prepared", types: dict[str, int], rundir: Path, present: list[str]) -> list[dict[str, object]]:
+def write_meshes(plan: RunPlan, types: dict[str, int], rundir: Path, present: list[str]) -> list[dict[str, object]]:
     """An ASCII STL per wall present (rundir/meshes); the template data of each."""
     mesh_dir = rundir / "meshes"
     mesh_dir.mkdir(exist_ok=True)
     walls = []
-    for wall, triangles in zip(case.walls, prepared.wall_triangles):
+    for wall, triangles in zip(plan.case.walls, plan.wall_triangles):
         if wall.name in present:
             stl = mesh_dir / f"{wall.name}.stl"
             geometry.write_ascii_stl(stl, triangles)
@@ -265,9 +266,10 @@ def write_meshes(case: Case, prepared: "common.Prepared", types: dict[str, int],
     return walls
 
 
-def write_data(case: Case, prepared: "common.Prepared", types: dict[str, int], path: Path) -> None:
+def write_data(plan: RunPlan, types: dict[str, int], path: Path) -> None:
     """LIGGGHTS data file (atom_style granular): Atoms `id type diameter density x y z`, then Velocities."""
-    lower, upper = prepared.domain.lower, prepared.domain.upper
+    case = plan.case
+    lower, upper = plan.domain.lower, plan.domain.upper
     lines = [
         f"LIGGGHTS data file written by dem-orchestrator for case {case.name}",
         "",

@@ -14,12 +14,13 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from orchestrator import physics
 from orchestrator.bricks import world_sphere_centres
 from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
-from orchestrator.engines.checkpoint import Resume, segment_name
+from orchestrator.engines.checkpoint import segment_name
+from orchestrator.plan import RunPlan
+from orchestrator.engines.build import engine_version
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, require_executable, run_engine
 from orchestrator.engines.yade.materials import GLUED, glued_clones, glued_friction, stand_in_scale, yade_materials
 
@@ -57,25 +58,27 @@ class YadeAdapter(AdapterDefaults):
 
     def info(self) -> EngineInfo:
         path = shutil.which(self.executable)
-        # The Debian package's version: asking `yade --version` starts YADE (a second or two).
-        version = common.package_version("yade") if path else None
+        version = engine_version(path, ("--version",), r"Yade version:\s*(\S+)")
         return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
 
-    def write_input(self, case: Case, case_dir: Path, rundir: Path, resume: Resume | None = None) -> Path:
+    def warnings(self, plan: RunPlan) -> tuple[str, ...]:
+        _, warning = stand_in_scale(plan.case)
+        return (warning,) if warning else ()
+
+    def write_input(self, plan: RunPlan, rundir: Path) -> Path:
         from orchestrator.engines.templating import render
 
-        self.segment = resume.segment if resume else 0
+        case, resume, segment = plan.case, plan.resume, plan.segment
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
-        # spring-dashpot with the same loading stiffness and restitution (docs/engines.md).
-        prepared = common.prepare(case, case_dir, dashpot_for_bilinear=case.law is ContactLaw.bilinear)
-        scale, warning = stand_in_scale(case)
-        self.warnings = (warning,) if warning else ()
-        pairs = [replace(p, cn=p.cn * scale) if p.law is ContactLaw.bilinear else p for p in prepared.pairs]
+        # spring-dashpot with the same loading stiffness and restitution (the plan's pairs carry it;
+        # docs/engines.md), scaled for clumps that land on several spheres at once.
+        scale, _ = stand_in_scale(case)
+        pairs = [replace(p, cn=p.cn * scale) if p.law is ContactLaw.bilinear else p for p in plan.pairs]
         as_boxes = [rectangle_box(wall) for wall in case.walls]
         boxes = [box for box in as_boxes if box is not None]
         facets = [
             (wall.name, wall.material, *[tuple(float(c) for c in vertex) for vertex in triangle])
-            for wall, triangles, box in zip(case.walls, prepared.wall_triangles, as_boxes)
+            for wall, triangles, box in zip(case.walls, plan.wall_triangles, as_boxes)
             if box is None
             for triangle in triangles
         ]
@@ -91,14 +94,14 @@ class YadeAdapter(AdapterDefaults):
         friction += glued_friction(friction, [str(c["name"]) for c in clones])
         data = {
             "seed": case.seed,
-            "dt": prepared.schedule.dt,
-            "total_steps": prepared.schedule.total_steps,
+            "dt": plan.schedule.dt,
+            "total_steps": plan.schedule.total_steps,
             "save_state": case.save_state,
-            "output_every": prepared.schedule.output_every,
+            "output_every": plan.schedule.output_every,
             "gravity": tuple(float(g) for g in case.gravity),
-            "frames_file": segment_name(FRAMES_NAME, self.segment),
-            "contacts_file": segment_name(CONTACTS_NAME, self.segment) if case.record_contacts else None,
-            "checkpoint_every": self.checkpoint_steps(case, prepared.schedule),
+            "frames_file": segment_name(FRAMES_NAME, segment),
+            "contacts_file": segment_name(CONTACTS_NAME, segment) if case.record_contacts else None,
+            "checkpoint_every": self.checkpoint_steps(plan),
             "resume": resume.file if resume else None,
             "walls": [wall.name for wall in case.walls],
             "materials": materials + clones,
@@ -107,35 +110,34 @@ class YadeAdapter(AdapterDefaults):
             "clumps": _clumps(case),
             "facets": facets,
             "boxes": boxes,
-            "removals": _removals(case, prepared.schedule),
-            "rest": common.rest_settings(case, prepared.schedule),
+            "removals": _removals(plan),
+            "rest": plan.rest.as_dict() if plan.rest else None,
         }
         context = {"name": case.name, "data": data}
-        script = rundir / segment_name(SCRIPT_NAME, self.segment)
+        script = rundir / segment_name(SCRIPT_NAME, segment)
         script.write_text(render("yade", "case.py.j2", context))
         return script
 
-    def execute(self, case: Case, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
-        script = rundir / segment_name(SCRIPT_NAME, self.segment)
+    def execute(self, plan: RunPlan, rundir: Path, progress: ProgressCallback | None = None, timeout: float | None = None) -> None:
+        script = rundir / segment_name(SCRIPT_NAME, plan.segment)
         executable = require_executable(self.executable, INSTALL_HINT)
-        end_time = physics.schedule(case).end_time
         command = [executable, f"-j{self.threads}", "-x", "-n", script.name]
         tail = run_engine(
-            command, rundir, script, _progress, end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback"),
-            log_name=self.log_name(),
+            command, rundir, script, _progress, plan.schedule.end_time, progress, timeout=timeout, failure_markers=("ERROR", "Traceback"),
+            log_name=self.log_name(plan),
         )
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
-            raise EngineError("YADE ended without finishing the script", script, rundir / self.log_name(), tail)
+            raise EngineError("YADE ended without finishing the script", script, rundir / self.log_name(plan), tail)
 
-    def read_output(self, case: Case, rundir: Path) -> Trajectory:
-        trajectory = common.frame_stream_trajectory(case, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
-        if case.record_contacts:
-            _, rows = common.read_segment_frames(rundir, CONTACTS_NAME, physics.schedule(case).dt)
+    def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
+        trajectory = common.frame_stream_trajectory(plan, rundir, FRAMES_NAME, rundir / SCRIPT_NAME, "YADE", orientation_tracked=True)
+        if plan.case.record_contacts:
+            _, rows = common.read_segment_frames(rundir, CONTACTS_NAME, plan.schedule.dt)
             trajectory.contacts = Contacts.from_frames(rows[: trajectory.n_frames])
         return trajectory
 
-    def last_frame_step(self, case: Case, rundir: Path) -> int | None:
-        return common.last_stream_step(rundir, FRAMES_NAME, physics.schedule(case).dt)
+    def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
+        return common.last_stream_step(rundir, FRAMES_NAME, plan.schedule.dt)
 
 
 def _clumps(case: Case) -> list[tuple]:
@@ -165,6 +167,6 @@ def rectangle_box(wall: Wall) -> tuple[str, str, list[float], list[float], list[
     return (wall.name, wall.material, centre.tolist(), [0.5 * la, 0.5 * lb, 0.0], [float(w), float(x), float(y), float(z)])
 
 
-def _removals(case: Case, plan: physics.Schedule) -> list[tuple[int, list[str]]]:
-    steps = physics.removal_steps(case, plan)
+def _removals(plan: RunPlan) -> list[tuple[int, list[str]]]:
+    steps = plan.removals
     return [(step, sorted(n for n, at in steps.items() if at == step)) for step in sorted(set(steps.values()))]

@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 from orchestrator.case import Case, CaseError, Name, Real, Strict, parse_case, parse_model, read_yaml
 from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
-from orchestrator.engines.settings import StudyEngineSections
+from orchestrator.engine_sections import StudyEngineSections
 from orchestrator.results import Trajectory
 
 GRAIN, WALL = "grain", "wall"  # one grain material: the rough bed's grains are glued grains (`fixed`)

@@ -1,7 +1,7 @@
 """Case and study sections that one engine reads and the others ignore.
 
-They live here, beside the engines, so that the case model names no engine: `Case` and the
-studies inherit these sections. This module imports nothing from the package.
+They live in this leaf module (it imports nothing from the package) so that the case model names
+no engine and loads no engine code: `Case` and the studies inherit these sections.
 """
 
 from __future__ import annotations

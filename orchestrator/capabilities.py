@@ -1,0 +1,116 @@
+"""The engines this package can drive, each with what it can do: one dict, one error listing them.
+
+Everything outside `engines/` asks this table for a capability (`capabilities(name).clumps`) and
+never compares engine names, so adding an engine is one folder under `engines/` and one entry here.
+It is a leaf: it imports nothing from the package (an adapter is named as "module:Class" and
+imported on first use, by `engines.adapter_class`), so the case model can read its engine choices
+from it without loading any engine code.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What an engine can run; the case validation, the studies and the CLI read these.
+
+    clumps: rigid clumps of spheres (multisphere bodies).
+    mixed_bodies: spheres and clumps in one case.
+    meshes: STL walls (rectangles are always supported).
+    mpi: one run split over MPI processes (`demorch --mpi N`).
+    restart: writes its whole state (`save_state`) and starts a case from it (`initial_state`),
+        contact history included.
+    compiled_law: the bilinear law of Richefeu et al. (2012) runs as compiled code; without it the
+        engine emulates the law with a spring-dashpot of the same loading stiffness and restitution.
+    implicit: contact dynamics without stiffness (e_n², k_n and k_t unused); its step is
+        `default_step`, not a fraction of a contact duration.
+    state_file: the file `save_state` writes in the run directory (None: no restart file).
+    contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
+    """
+
+    clumps: bool
+    mixed_bodies: bool
+    meshes: bool
+    mpi: bool
+    restart: bool
+    compiled_law: bool
+    implicit: bool
+    default_step: float | None = None
+    state_file: str | None = None
+    contact_output: bool = False
+
+
+@dataclass(frozen=True)
+class EngineEntry:
+    name: str
+    adapter: str  # "module:Class", imported on first use
+    capabilities: Capabilities
+    summary: str
+    # Micro-cases of the parity matrix (orchestrator.parity) this engine is known to miss: why, and
+    # the value measured (dated in the docs' parity table).
+    parity_gaps: tuple[tuple[str, str], ...] = ()
+
+
+ENGINES: dict[str, EngineEntry] = {
+    entry.name: entry
+    for entry in (
+        EngineEntry(
+            "liggghts",
+            "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
+            Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
+                         implicit=False, state_file="state.restart", contact_output=True),
+            "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
+        ),
+        EngineEntry(
+            "yade",
+            "orchestrator.engines.yade.adapter:YadeAdapter",
+            Capabilities(clumps=True, mixed_bodies=True, meshes=True, mpi=False, restart=False, compiled_law=False,
+                         implicit=False, contact_output=True),
+            "YADE 2023.02a (Debian), the bilinear law emulated by a dashpot",
+            (("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
+             ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)")),
+        ),
+        EngineEntry(
+            "cocd",
+            "orchestrator.engines.cocd.adapter:CocdAdapter",
+            # The erodible-bed study's 2D step (no stiffness, so no contact duration to scale from).
+            Capabilities(clumps=False, mixed_bodies=False, meshes=False, mpi=False, restart=False, compiled_law=False,
+                         implicit=True, default_step=1e-3),
+            "convex contact dynamics of this package (spheres, implicit)",
+        ),
+    )
+}
+
+ENGINE_NAMES: tuple[str, ...] = tuple(ENGINES)
+DEFAULT_ENGINE = ENGINE_NAMES[0]
+
+# The case model's `engine` field: one member per registered engine.
+Engine = Enum("Engine", {name: name for name in ENGINE_NAMES}, type=str)  # type: ignore[misc]
+Engine.__doc__ = "An engine of the table (orchestrator.capabilities.ENGINES)."
+Engine.__str__ = lambda self: self.value  # type: ignore[method-assign]
+
+
+class UnknownEngine(ValueError):
+    """A name that is not in the registry; the message lists the engines that exist."""
+
+
+def entry(name: str | Enum) -> EngineEntry:
+    key = name.value if isinstance(name, Enum) else name
+    try:
+        return ENGINES[key]
+    except KeyError:
+        raise UnknownEngine(f"unknown engine {key!r}; allowed: {', '.join(ENGINE_NAMES)}") from None
+
+
+def capabilities(name: str | Enum) -> Capabilities:
+    return entry(name).capabilities
+
+
+def engines_with(**wanted: Any) -> tuple[str, ...]:
+    """Names of the engines whose capabilities match every keyword, e.g. engines_with(clumps=True)."""
+    return tuple(n for n, e in ENGINES.items() if all(getattr(e.capabilities, k) == v for k, v in wanted.items()))
+
