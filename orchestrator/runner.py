@@ -64,7 +64,8 @@ def resume_point(plan: RunPlan, directory: Path, adapter: EngineAdapter | None =
 
     A run is cut off when its record says `running` and no process holds the directory's lock (the
     caller holds it, or checks is_locked). It continues only with the same run id (same inputs and
-    build) and a checkpoint completed before its newest frame.
+    build), from the newest checkpoint that was sealed complete and still matches its seal; a damaged
+    one is set aside (engines.checkpoint), never deleted.
     """
     case = plan.case
     adapter = adapter or get_adapter(case.engine.value)
@@ -74,11 +75,11 @@ def resume_point(plan: RunPlan, directory: Path, adapter: EngineAdapter | None =
     if previous.get("run_id") != (identity or rundir.run_id(case, case_dir=plan.case_dir)):
         return None
     reached = adapter.last_frame_step(plan, directory)
-    found = adapter.usable_checkpoints(plan, directory, reached)
-    if not found:
-        return None
-    step, path = found[-1]
-    return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name, reached)
+    for step, path in reversed(adapter.usable_checkpoints(plan, directory)):
+        if checkpoint.verified(path):  # the newest whose content matches its seal
+            return Resume(checkpoint.next_segment(directory, LOG_NAME), step, path.name, reached)
+        checkpoint.set_aside(path)  # damaged: kept beside the run as checkpoint.<step>.<ext>.damaged
+    return None
 
 
 def resumable(directory: Path, case_dir: Path, plan: RunPlan | None = None) -> bool:
@@ -149,6 +150,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
         for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
             path.unlink()
+            checkpoint.seal_path(path).unlink(missing_ok=True)
     return record
 
 

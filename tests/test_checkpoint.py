@@ -83,10 +83,10 @@ def test_a_run_continued_from_any_checkpoint_ends_as_the_uninterrupted_one(engin
     adapter.write_input(plan, tmp_path)
     adapter.execute(plan, tmp_path)
     whole = adapter.read_output(plan, tmp_path)
-    kept = checkpoint.usable(tmp_path, adapter.checkpoint_ext, adapter.last_frame_step(plan, tmp_path))
+    kept = checkpoint.usable(tmp_path, adapter.checkpoint_ext)
     steps = [step for step, _ in kept]
     assert len(steps) == 2 and steps[0] * 2 == steps[1]  # the two newest kept: 0.1 and 0.2 s
-    found = adapter.usable_checkpoints(plan, tmp_path, adapter.last_frame_step(plan, tmp_path))
+    found = adapter.usable_checkpoints(plan, tmp_path)
     assert [step for step, _ in found] == (steps[1:] if engine == "liggghts" else steps)
     for segment, (step, path) in enumerate(found, start=1):
         resumed = plan.resumed(Resume(segment, step, path.name))
@@ -115,7 +115,7 @@ def _kill_after_a_checkpoint(process: subprocess.Popen, case: Case, directory: P
     plan = make_plan(case, directory.parent)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
-        if directory.exists() and checkpoint.usable(directory, adapter.checkpoint_ext, adapter.last_frame_step(plan, directory)):
+        if directory.exists() and checkpoint.usable(directory, adapter.checkpoint_ext):
             break
         assert process.poll() is None, "the run ended before a checkpoint could be used"
         time.sleep(0.02)
@@ -186,7 +186,7 @@ def test_a_campaign_whose_dask_workers_are_killed_resumes_every_run(tmp_path: Pa
         cut: list[str] = []
         while time.monotonic() < deadline and not cut:
             points = list((out / "runs").glob("*")) if (out / "runs").exists() else []
-            cut = [p.name for p in points if checkpoint.usable(p, "restart", adapter.last_frame_step(make_plan(case, p), p))]
+            cut = [p.name for p in points if checkpoint.usable(p, "restart")]
             time.sleep(0.02)
         assert cut, "no point reached a checkpoint"
         for pid in client.run(os.getpid).values():
@@ -215,13 +215,16 @@ def test_a_later_segment_replaces_frames_from_its_first_step_on() -> None:
     assert steps == [0, 10, 20, 30, 40, 50] and frames == list("abCDxy")
 
 
-def test_a_checkpoint_counts_once_a_later_frame_exists_and_the_two_newest_are_kept(tmp_path: Path) -> None:
+def test_a_checkpoint_counts_once_sealed_and_the_two_newest_sealed_are_kept(tmp_path: Path) -> None:
     for step in (100, 200, 300, 400):
-        (tmp_path / f"checkpoint.{step}.restart").write_text("")
-    assert [s for s, _ in checkpoint.usable(tmp_path, "restart", 400)] == [100, 200, 300]  # 400 may be half written
-    checkpoint.prune(tmp_path, "restart", 400)
+        (tmp_path / f"checkpoint.{step}.restart").write_text(f"state {step}")
+    assert checkpoint.usable(tmp_path, "restart") == []  # nothing sealed yet
+    checkpoint.seal(tmp_path, "restart", 300)  # the engine went past 300: 400 may be half written
+    assert [s for s, _ in checkpoint.usable(tmp_path, "restart")] == [100, 200, 300]
+    assert all(checkpoint.verified(path) for _, path in checkpoint.usable(tmp_path, "restart"))
+    checkpoint.prune(tmp_path, "restart")
     assert [s for s, _ in checkpoint.checkpoints(tmp_path, "restart")] == [200, 300, 400]
-    assert checkpoint.usable(tmp_path, "restart", None) == []
+    assert not (tmp_path / "checkpoint.100.restart.sha256").exists()
 
 
 def test_the_checkpoint_interval_is_whole_output_intervals_and_can_be_turned_off(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -258,8 +261,8 @@ class _Adapter:
     def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
         return self.last
 
-    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
-        return checkpoint.usable(rundir, self.checkpoint_ext, last_frame_step)
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path) -> list[tuple[int, Path]]:
+        return checkpoint.usable(rundir, self.checkpoint_ext)
 
 
 def _cut_off(directory: Path, case: Case, status: str = "running", run_id: str | None = None) -> None:
@@ -269,21 +272,40 @@ def _cut_off(directory: Path, case: Case, status: str = "running", run_id: str |
     rundir.save_inputs(directory, case)
     (directory / "run.json").write_text(json.dumps({"status": status, "run_id": run_id or rundir.run_id(case)}))
     (directory / "engine.log").write_text("")
-    for step in (50, 100):
-        (directory / f"checkpoint.{step}.npz").write_text("")
+    for step in (50, 100, 150):
+        (directory / f"checkpoint.{step}.npz").write_text(f"state {step}")
+    checkpoint.seal(directory, "npz", 100)  # 150 was being written when the run was cut off
 
 
 def test_only_a_cut_off_run_of_the_same_inputs_with_a_finished_checkpoint_resumes(tmp_path: Path) -> None:
     case = trap_case("cocd")
     _cut_off(tmp_path, case)
     plan = make_plan(case, tmp_path)
-    assert resume_point(plan, tmp_path, _Adapter(last=120)) == Resume(1, 100, "checkpoint.100.npz")
-    assert resume_point(plan, tmp_path, _Adapter(last=100)) == Resume(1, 50, "checkpoint.50.npz")  # 100 may be half written
-    assert resume_point(plan, tmp_path, _Adapter(last=40)) is None
+    assert resume_point(plan, tmp_path, _Adapter(last=160)) == Resume(1, 100, "checkpoint.100.npz")  # 150 has no seal
+    # A resumed segment cut off right after its first frame (at its checkpoint's step) goes on from the same checkpoint.
+    assert resume_point(plan, tmp_path, _Adapter(last=100)) == Resume(1, 100, "checkpoint.100.npz")
     other = make_plan(trap_case("cocd", duration=0.4), tmp_path)
     assert resume_point(other, tmp_path, _Adapter(last=120)) is None  # other inputs: start afresh
     _cut_off(tmp_path, case, status="failed")
     assert resume_point(plan, tmp_path, _Adapter(last=120)) is None
+
+
+@pytest.mark.parametrize("damage", ["truncated", "zeroed", "random", "empty", "one number changed"])
+def test_a_damaged_checkpoint_is_set_aside_and_the_older_one_used(damage: str, tmp_path: Path) -> None:
+    """Never restart from zero while a checkpoint that matches its seal exists; never delete the damaged one."""
+    case = trap_case("cocd")
+    _cut_off(tmp_path, case)
+    newest = tmp_path / "checkpoint.100.npz"
+    text = newest.read_bytes()
+    newest.write_bytes({"truncated": text[:3], "zeroed": bytes(len(text)), "random": os.urandom(len(text)), "empty": b"",
+                        "one number changed": text.replace(b"100", b"101")}[damage])
+    plan = make_plan(case, tmp_path)
+    assert resume_point(plan, tmp_path, _Adapter(last=160)) == Resume(1, 50, "checkpoint.50.npz")
+    assert (tmp_path / "checkpoint.100.npz.damaged").read_bytes() == newest.with_name("checkpoint.100.npz.damaged").read_bytes()
+    assert not newest.exists() and (tmp_path / "checkpoint.100.npz.damaged.sha256").exists()
+    (tmp_path / "checkpoint.50.npz").write_bytes(b"")  # the older one damaged too: nothing verified is left
+    assert resume_point(plan, tmp_path, _Adapter(last=160)) is None
+    assert sorted(p.name for p in tmp_path.glob("*.damaged")) == ["checkpoint.100.npz.damaged", "checkpoint.50.npz.damaged"]
 
 
 @pytest.mark.parametrize("engine", ENGINES)

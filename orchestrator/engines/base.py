@@ -7,9 +7,11 @@ An adapter writes its input into a run directory, executes the engine there (log
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import subprocess
 import threading
+import time
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +25,10 @@ if TYPE_CHECKING:
 from orchestrator.results import Trajectory
 
 LOG_NAME = "engine.log"
+MAX_LOG_BYTES = 256 * 2**20  # an engine log is capped here (the tail and the failure scan still read everything)
+MAX_LOG_WITHOUT_PROGRESS = 64 * 2**20  # bytes of log without the simulated time advancing: a runaway engine
+STALL_ENV = "DEMORCH_STALL_S"
+STALL_S = 1800.0  # s without the simulated time advancing before an engine is stopped (the slowest output seen: about a minute)
 TAIL_LINES = 25
 CONTEXT_BEFORE, CONTEXT_AFTER = 8, 12  # lines kept around an engine's first error line
 
@@ -101,9 +107,9 @@ class EngineAdapter(Protocol):
         """The step of the newest frame written by any segment (None: none yet)."""
         ...
 
-    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
-        """(step, path) of the checkpoints a cut-off run whose newest frame is at last_frame_step
-        may continue from, oldest first."""
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path) -> list[tuple[int, Path]]:
+        """(step, path) of the sealed checkpoints a cut-off run may continue from, oldest first
+        (engines.checkpoint; whether each still matches its seal is checked by the caller)."""
         ...
 
 
@@ -134,11 +140,11 @@ class AdapterDefaults:
         return (self.options or RunOptions()).checkpoint_steps(plan.case.time.duration, schedule.dt, schedule.output_every,
                                                                schedule.total_steps)
 
-    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
-        """(step, path) of the checkpoints a cut-off run may continue from, oldest first."""
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path) -> list[tuple[int, Path]]:
+        """(step, path) of the sealed checkpoints a cut-off run may continue from, oldest first."""
         from orchestrator.engines import checkpoint
 
-        return checkpoint.usable(rundir, self.checkpoint_ext or "", last_frame_step)
+        return checkpoint.usable(rundir, self.checkpoint_ext or "")
 
     @staticmethod
     def log_name(plan: RunPlan) -> str:
@@ -172,7 +178,7 @@ def require_executable(name: str, install_hint: str) -> str:
 
 class _LogScan:
     """Reads an engine's output line by line: the tail, the first failure line with the lines around
-    it, and the simulated time for progress."""
+    it, the simulated time for progress, and how much it wrote since the simulation last advanced."""
 
     def __init__(self, markers: tuple[str, ...], parse_progress: Callable[[str], float | None],
                  progress: ProgressCallback | None, end_time: float):
@@ -180,8 +186,12 @@ class _LogScan:
         self.tail: deque[str] = deque(maxlen=TAIL_LINES)
         self.failure: str | None = None
         self.context: list[str] | None = None  # the lines around the first failure line
+        self.simulated = -math.inf
+        self.advanced_at = time.monotonic()
+        self.bytes_since_advance = 0
 
     def feed(self, line: str) -> None:
+        self.bytes_since_advance += len(line) + 1
         self.tail.append(line)
         stripped = line.lstrip()
         if self.failure is None and any(stripped.startswith(marker) for marker in self.markers):
@@ -193,8 +203,53 @@ class _LogScan:
         if simulated is not None:
             if not math.isfinite(simulated):
                 self.failure = self.failure or f"non-finite value in engine output: {stripped}"
-            elif self.progress is not None:
+                return
+            if simulated > self.simulated:
+                self.simulated, self.advanced_at, self.bytes_since_advance = simulated, time.monotonic(), 0
+            if self.progress is not None:
                 self.progress(simulated, self.end_time)
+
+
+class _Watchdog:
+    """Stops an engine that runs away: one that writes more than MAX_LOG_WITHOUT_PROGRESS bytes of log
+    without its simulated time advancing (an engine looping on a warning fills a disk in minutes), or
+    whose simulated time has not advanced for `stall` seconds. The reason is kept for the error."""
+
+    def __init__(self, scan: _LogScan, process: subprocess.Popen, stall: float | None):
+        self.scan, self.process, self.stall = scan, process, stall
+        self.reason: str | None = None
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True) if stall else None
+        if self._thread is not None:
+            self._thread.start()
+
+    def check_output(self) -> None:
+        """Called for each line read."""
+        if self.reason is None and self.scan.bytes_since_advance > MAX_LOG_WITHOUT_PROGRESS:
+            self._stop(f"wrote {self.scan.bytes_since_advance / 2**20:.0f} MiB of log without its simulated time advancing and was stopped")
+
+    def _watch(self) -> None:
+        while not self._done.wait(min(5.0, self.stall)):
+            if time.monotonic() - self.scan.advanced_at > self.stall:
+                self._stop(f"made no progress for {self.stall:.0f} s (${STALL_ENV}) and was stopped")
+                return
+
+    def _stop(self, reason: str) -> None:
+        self.reason = reason
+        self.process.kill()
+
+    def close(self) -> None:
+        self._done.set()
+
+
+def stall_seconds() -> float | None:
+    """${STALL_ENV}: seconds without progress after which an engine is stopped (0: never); default STALL_S."""
+    value = os.environ.get(STALL_ENV, "").strip()
+    try:
+        seconds = float(value) if value else STALL_S
+    except ValueError:
+        seconds = STALL_S
+    return seconds if math.isfinite(seconds) and seconds > 0 else None
 
 
 def run_engine(
@@ -226,17 +281,23 @@ def run_engine(
         except OSError as error:
             raise EngineError(f"could not start {command[0]}: {error.strerror}", deck, log_path) from None
         assert process.stdout is not None
-        watchdog = threading.Timer(timeout, lambda: (timed_out.set(), process.kill())) if timeout else None
-        if watchdog is not None:
-            watchdog.start()
+        timer = threading.Timer(timeout, lambda: (timed_out.set(), process.kill())) if timeout else None
+        if timer is not None:
+            timer.start()
+        watchdog = _Watchdog(scan, process, stall_seconds())
+        written = 0
         for line in process.stdout:
-            log.write(line)
+            if written < MAX_LOG_BYTES:  # the log is capped; the scan (tail, failure, progress) still sees every line
+                log.write(line if written + len(line) < MAX_LOG_BYTES else f"# log capped at {MAX_LOG_BYTES // 2**20} MiB here\n")
+                written += len(line)
             scan.feed(line.rstrip("\n"))
+            watchdog.check_output()
         returncode = process.wait()
-        if watchdog is not None:
-            watchdog.cancel()
+        watchdog.close()
+        if timer is not None:
+            timer.cancel()
     # A failed run's tail shows the lines around what went wrong, not the engine's closing statistics.
-    _raise_on_failure(scan.failure, timeout if timed_out.is_set() else None, returncode, command, deck, log_path,
+    _raise_on_failure(scan.failure or watchdog.reason, timeout if timed_out.is_set() else None, returncode, command, deck, log_path,
                       scan.context or list(scan.tail))
     return list(scan.tail)
 

@@ -8,13 +8,20 @@ engine log) under names carrying its number (`segment_name`), so nothing an earl
 is overwritten; readers merge them, a later segment's frames replacing an earlier one's from its
 first frame on (`merge`).
 
-A checkpoint is usable once a frame after its step was written: one cut short while being written
-(the engine killed in the middle) is never used. The two newest usable checkpoints are kept, older
-ones are deleted (`prune`).
+A checkpoint is sealed once it is complete: its sha256 is written beside it
+(`checkpoint.<step>.<ext>.sha256`) by the engine's runner after the file took its name (YADE, cocd)
+or by the orchestrator once the engine has gone past its step (LIGGGHTS writes a restart file before
+the thermo line of its step). A run continues only from a sealed checkpoint whose content still
+matches its seal, the newest such; one that does not match (truncated, zeroed, edited) is set aside
+as `checkpoint.<step>.<ext>.damaged` (kept, never deleted) and the next older one is tried; one cut
+short while being written has no seal and is never used. The two newest sealed checkpoints are
+kept, older ones are deleted (`prune`).
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
 import re
 from pathlib import Path
 from typing import Sequence, TypeVar
@@ -82,21 +89,65 @@ def checkpoints(rundir: Path, ext: str) -> list[tuple[int, Path]]:
     return sorted(found)
 
 
-def usable(rundir: Path, ext: str, last_frame_step: int | None) -> list[tuple[int, Path]]:
-    """The checkpoints written completely: those before the last frame written, oldest first."""
-    if last_frame_step is None:
-        return []
-    return [(step, path) for step, path in checkpoints(rundir, ext) if step < last_frame_step]
+SEAL = ".sha256"
+DAMAGED = ".damaged"
 
 
-def prune(rundir: Path, ext: str, last_frame_step: int | None, keep: int = KEEP) -> None:
-    """Delete the checkpoints older than the `keep` newest usable ones (a newer one being written
-    stays). last_frame_step None: every checkpoint counts as complete (an engine that writes them
-    through a temporary name)."""
-    found = checkpoints(rundir, ext)
-    kept = (found if last_frame_step is None else usable(rundir, ext, last_frame_step))[-keep:]
+def seal_path(path: Path) -> Path:
+    return path.with_name(path.name + SEAL)
+
+
+def digest(path: Path) -> str:
+    """sha256 of a file's content, read in blocks."""
+    value = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            value.update(block)
+    return value.hexdigest()
+
+
+def seal(rundir: Path, ext: str, up_to_step: int | None = None) -> None:
+    """Write the seal of every complete, unsealed checkpoint (those at or before up_to_step; None: all)."""
+    for step, path in checkpoints(rundir, ext):
+        target = seal_path(path)
+        if (up_to_step is None or step <= up_to_step) and not target.exists():
+            temporary = target.with_name(target.name + ".tmp")
+            try:
+                temporary.write_text(digest(path) + "\n")
+                os.replace(temporary, target)
+            except FileNotFoundError:
+                continue  # pruned meanwhile by the engine itself
+
+
+def usable(rundir: Path, ext: str) -> list[tuple[int, Path]]:
+    """The checkpoints written completely (sealed), oldest first; their content is not read."""
+    return [(step, path) for step, path in checkpoints(rundir, ext) if seal_path(path).exists()]
+
+
+def verified(path: Path) -> bool:
+    """The checkpoint's content still matches its seal."""
+    try:
+        return seal_path(path).read_text().strip() == digest(path)
+    except OSError:
+        return False
+
+
+def set_aside(path: Path) -> Path:
+    """Rename a damaged checkpoint (and its seal) out of the way: checkpoint.<step>.<ext>.damaged."""
+    target = path.with_name(path.name + DAMAGED)
+    os.replace(path, target)
+    if seal_path(path).exists():
+        os.replace(seal_path(path), target.with_name(target.name + SEAL))
+    return target
+
+
+def prune(rundir: Path, ext: str, keep: int = KEEP) -> None:
+    """Delete the checkpoints (and seals) older than the `keep` newest sealed ones; a newer one being
+    written, and the damaged ones set aside, stay."""
+    kept = usable(rundir, ext)[-keep:]
     if not kept:
         return
-    for step, path in found:
+    for step, path in checkpoints(rundir, ext):
         if step < kept[0][0]:
             path.unlink(missing_ok=True)
+            seal_path(path).unlink(missing_ok=True)

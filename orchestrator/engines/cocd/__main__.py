@@ -79,7 +79,8 @@ def save_checkpoint(scene: Scene, n: int, stats: dict) -> None:
         np.savez(handle, step=n, position=scene.position, velocity=scene.velocity, spin=scene.spin, active=scene.walls.active,
                  stats=json.dumps(stats))
     os.replace("checkpoint.saving.npz", f"checkpoint.{n}.npz")
-    checkpoint.prune(Path("."), "npz", None)
+    checkpoint.seal(Path("."), "npz", n)
+    checkpoint.prune(Path("."), "npz")
     print(f"DEMORCH_CHECKPOINT step {n}", flush=True)
 
 

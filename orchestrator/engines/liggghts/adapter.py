@@ -119,7 +119,9 @@ class LiggghtsAdapter(AdapterDefaults):
         log = rundir / self.log_name(plan)
         dt, total = plan.schedule.dt, plan.schedule.total_steps
         # A checkpoint before a thermo line is complete (LIGGGHTS writes restart files before thermo).
-        watcher = ThermoWatcher(dt, lambda step: checkpoint.prune(rundir, CHECKPOINT_EXT, step))
+        # `restart N` also writes one at the last step: left unsealed, as the other engines write none there.
+        watcher = ThermoWatcher(dt, lambda step: (checkpoint.seal(rundir, CHECKPOINT_EXT, min(step, total - 1)),
+                                                  checkpoint.prune(rundir, CHECKPOINT_EXT)))
         env = dict(os.environ)
         if case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
             env.update(plugin.liggghts_env(plugin.ensure_plugin()))
@@ -186,12 +188,12 @@ class LiggghtsAdapter(AdapterDefaults):
             frames.append(contact_rows(pairs.get(step), walls.get(step), atom_slot, present))
         return Contacts.from_frames(frames)
 
-    def usable_checkpoints(self, plan: RunPlan, rundir: Path, last_frame_step: int | None) -> list[tuple[int, Path]]:
+    def usable_checkpoints(self, plan: RunPlan, rundir: Path) -> list[tuple[int, Path]]:
         """Not those at a wall removal step: LIGGGHTS rebuilds its wall fix there, and a run
         continued from that instant departs from the uninterrupted one (measured 2026-11-30: 1e-7 m,
         2.5e-4 m/s on spheres resting on the wall that stays); from any other step it is exact."""
         removals = set(plan.removals.values())
-        return [(step, path) for step, path in super().usable_checkpoints(plan, rundir, last_frame_step) if step not in removals]
+        return [(step, path) for step, path in super().usable_checkpoints(plan, rundir) if step not in removals]
 
     def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
         columns = len(CLUMP_COLUMNS if plan.case.bodies.clumps else SPHERE_COLUMNS)
