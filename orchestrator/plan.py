@@ -21,6 +21,7 @@ import numpy as np
 from orchestrator import geometry, physics, preflight
 from orchestrator.capabilities import capabilities
 from orchestrator.case import Case, Domain
+from orchestrator.estimate import OutputEstimate, estimate
 
 
 @dataclass(frozen=True)
@@ -60,7 +61,8 @@ class RunPlan:
     bodies: one BodyInfo per body in results.h5 order. pairs: the constants of every listed pair,
     with the dashpot an engine without the compiled law uses in its place. wall_triangles: (t, 3, 3)
     per wall, in case order (m). removals: wall name → removal step. rest: None without
-    stop_at_rest. resume: the checkpoint a continued run starts from (None: from t = 0).
+    stop_at_rest. output: what the run will write and hold in memory. resume: the checkpoint a
+    continued run starts from (None: from t = 0).
     """
 
     case: Case
@@ -72,6 +74,7 @@ class RunPlan:
     domain: Domain
     removals: Mapping[str, int]
     rest: RestChecks | None
+    output: OutputEstimate
     resume: Resume | None = None
 
     @property
@@ -108,7 +111,8 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
     schedule = physics.schedule(case)
     table = tuple(physics.bodies(case))
     triangles = tuple(geometry.wall_triangles(wall, case_dir) for wall in case.walls)
-    preflight.check_all(case, case_dir, schedule, table, triangles)
+    output = estimate(case, schedule, table)
+    preflight.check_all(case, case_dir, schedule, table, triangles, output)
     can = capabilities(case.engine)
     # An engine without the compiled law runs a dashpot in its place; an implicit one has no stiffness to damp.
     pairs = tuple(physics.pair_constants(case, dashpot_for_bilinear=not can.compiled_law, damping=not can.implicit))
@@ -123,6 +127,7 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
         domain=case.domain or geometry.automatic_domain(case, list(triangles), schedule.end_time, table),
         removals=MappingProxyType(removals),
         rest=rest_checks(case, schedule, removals, table),
+        output=output,
     )
 
 

@@ -5,7 +5,8 @@ do instead:
 - the time step against the shortest contact duration: an explicit engine needs several steps per
   contact (MAX_STEP_FRACTION), or contacts are skipped and bodies leave at any speed;
 - initial speeds against the step: a body may cross at most a tenth of the smallest radius per step;
-- the output: frame count and results size, capped (MAX_FRAMES, MAX_RESULTS_BYTES);
+- the output: frame count and results size (contacts included), capped (MAX_FRAMES, MAX_RESULTS_BYTES);
+  what the machine can hold is checked where the run directory is known (estimate.check_machine);
 - the geometry: spheres overlapping each other (coincident ones included), spheres cut by a wall,
   bodies outside an explicit domain;
 - the initial state: a state file the engine wrote (`save_state`) for a completed run.
@@ -21,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from orchestrator import physics
 from orchestrator.case import Case, CaseError
+from orchestrator.estimate import OutputEstimate
 from orchestrator.capabilities import capabilities
 from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
 
@@ -34,13 +36,13 @@ OVERLAP_TOLERANCE = 0.05
 
 
 def check_all(case: Case, case_dir: Path, plan: physics.Schedule, table: Sequence[physics.BodyInfo],
-              triangles: Sequence[np.ndarray]) -> None:
+              triangles: Sequence[np.ndarray], output: OutputEstimate) -> None:
     """Raise CaseError for the first problem found; return when the case is fit to run.
 
     Called by `orchestrator.plan.make_plan` with the numbers the run will use (its schedule, body
-    table and wall triangles, one (t, 3, 3) array per wall), so they are computed once."""
+    table, wall triangles (one (t, 3, 3) array per wall) and output estimate), so they are computed once."""
     check_step(case, plan.dt)
-    check_output(case, plan, len(table))
+    check_output(case, output)
     check_speeds(case, plan.dt, table)
     check_geometry(case, table, triangles)
     check_initial_state(case, case_dir)
@@ -55,13 +57,15 @@ def check_step(case: Case, dt: float) -> None:
                         f"so contacts would be missed; allowed range: (0, {MAX_STEP_FRACTION * duration:.3g}] (or step: auto)")
 
 
-def check_output(case: Case, plan: physics.Schedule, bodies: int) -> None:
-    frames = plan.frames + 1
-    size = frames * bodies * 13 * 8
+def check_output(case: Case, output: OutputEstimate) -> None:
+    """At most MAX_FRAMES frames and MAX_RESULTS_BYTES of results (contacts included), whatever the machine."""
+    frames, size = output.frames, output.results
     if frames > MAX_FRAMES or size > MAX_RESULTS_BYTES:
-        smallest = case.time.duration / min(MAX_FRAMES - 1, MAX_RESULTS_BYTES / (bodies * 13 * 8) - 1)
-        raise CaseError(f"time.output_interval: {case.time.output_interval!r} s gives {frames} frames ({size / 2**30:.3g} GB of results); "
-                        f"allowed: at most {MAX_FRAMES} frames and {MAX_RESULTS_BYTES // 2**30} GB, an interval of at least {smallest:.3g} s")
+        per_frame = size / frames
+        smallest = case.time.duration / min(MAX_FRAMES - 1, MAX_RESULTS_BYTES / per_frame - 1)
+        raise CaseError(f"time.output_interval: {case.time.output_interval!r} s gives {frames} frames ({size / 2**30:.3g} GB of results"
+                        f"{', contacts included' if case.record_contacts else ''}); allowed: at most {MAX_FRAMES} frames and "
+                        f"{MAX_RESULTS_BYTES // 2**30} GB, an interval of at least {smallest:.3g} s")
 
 
 def check_speeds(case: Case, dt: float, table: Sequence[physics.BodyInfo]) -> None:

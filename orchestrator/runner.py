@@ -22,6 +22,7 @@ from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, ProgressCallback
+from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
 from orchestrator.results import Trajectory, write_results
@@ -104,10 +105,11 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     plan = plan.resumed(resume_point(plan, directory, adapter, identity))
     if plan.resume is None and (directory / RUN_RECORD).exists():
         rundir.retire(directory, directory.parent)  # an earlier attempt's files: kept in ../attic, never mixed with this one's
+    large = check_machine(plan.output, directory)  # CaseError when it would not fit this machine
     segments = _segments(plan, directory)
     rundir.save_inputs(directory, case)
     deck = adapter.write_input(plan, directory)
-    warnings = adapter.warnings(plan)
+    warnings = adapter.warnings(plan) + ((large,) if large else ())
     record: dict[str, Any] = {
         "orchestrator_version": __version__,
         "kind": "case",

@@ -24,7 +24,7 @@ LAYERS: list[tuple[str, ...]] = [
      "orchestrator.figures",
      "orchestrator.bricks", "orchestrator.contact.law", "orchestrator.contact"),
     ("orchestrator.case",),
-    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.preflight", "orchestrator.plan"),
+    ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.estimate", "orchestrator.preflight", "orchestrator.plan"),
     ("orchestrator.engines",),
     ("orchestrator.rundir",),
     ("orchestrator.runner",),

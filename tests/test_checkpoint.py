@@ -112,7 +112,6 @@ def _demorch(*arguments: str, cwd: Path) -> subprocess.Popen:
 def _kill_after_a_checkpoint(process: subprocess.Popen, case: Case, directory: Path) -> None:
     """SIGKILL the orchestrator and its engine (one process group) once a checkpoint is usable."""
     adapter = get_adapter(case.engine.value)
-    plan = make_plan(case, directory.parent)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         if directory.exists() and checkpoint.usable(directory, adapter.checkpoint_ext):
@@ -180,8 +179,6 @@ def test_a_campaign_whose_dask_workers_are_killed_resumes_every_run(tmp_path: Pa
         runner = threading.Thread(target=lambda: outcome.update(counts=run_campaign(
             tmp_path / "campaign.yaml", out, jobs=2, executor="dask", dask_address=cluster.scheduler_address)))
         runner.start()
-        adapter = get_adapter("liggghts")
-        case = parse_case(base)
         deadline = time.monotonic() + 120
         cut: list[str] = []
         while time.monotonic() < deadline and not cut:

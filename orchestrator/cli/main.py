@@ -27,6 +27,7 @@ from orchestrator.cli.schema import schema_command
 from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
+from orchestrator.estimate import check_machine
 from orchestrator.plan import make_plan
 from orchestrator.post import summary as metrics
 from orchestrator.results import REPORT, RUN_RECORD, read_results
@@ -43,6 +44,9 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        large = check_machine(plan.output, rundir)
+        if large:
+            errors.print(f"[yellow]warning:[/] {large}", markup=True, highlight=False, soft_wrap=True)
         resume = None if rundir_lock_held(rundir) else resume_point(plan, rundir)
         if resume is not None:
             console.print(f"{rundir}: resuming from the checkpoint at t = {resume.step * plan.schedule.dt:.4g} s "
