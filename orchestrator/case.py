@@ -98,7 +98,7 @@ class TimeSettings(Strict):
 
 class Material(Strict):
     name: Name
-    density: Real(unit="kg/m³", gt=0.0, le=1e5)
+    density: Real(unit="kg/m³", ge=1.0, le=1e5)
 
 
 class ContactLaw(str, Enum):
@@ -126,7 +126,7 @@ class ContactPair(Strict):
 
 class Sphere(Strict):
     material: Name
-    radius: Real(unit="m", gt=0.0, le=10.0)
+    radius: Real(unit="m", ge=1e-6, le=10.0)  # from a micron: a smaller body's mass and inertia underflow in the engines
     position: Position
     velocity: Velocity = (0.0, 0.0, 0.0)
     angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
@@ -186,6 +186,9 @@ class Clump(Strict):
         """Normalised, but kept to the bit when already unit (to 1e-12): renormalising moves last bits, so a
         case read back from case.json would hash to another run id and a finished run never be reused."""
         norm = math.sqrt(sum(v * v for v in value))
+        if not 1e-9 <= norm < math.inf and max(map(abs, value)) > 0.0:  # the squares overflowed or underflowed: rescale first
+            value = tuple(v / max(map(abs, value)) for v in value)  # type: ignore[assignment]
+            norm = math.sqrt(sum(v * v for v in value))
         if norm < 1e-9:
             raise ValueError("must be a non-zero quaternion (w, x, y, z)")
         return value if abs(norm - 1.0) <= 1e-12 else tuple(v / norm for v in value)  # type: ignore[return-value]

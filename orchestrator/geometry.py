@@ -5,8 +5,7 @@ LIGGGHTS reads them as an ASCII STL mesh, YADE as facets, so both engines see id
 
 from __future__ import annotations
 
-import warnings
-
+import re
 from pathlib import Path
 from typing import Sequence
 
@@ -15,6 +14,7 @@ import numpy as np
 
 from orchestrator import physics
 from orchestrator.case import Case, CaseError, Domain, MeshWall, RectangleWall, Wall
+from orchestrator.validation import read_capped
 
 
 def rectangle_triangles(wall: RectangleWall) -> np.ndarray:
@@ -25,22 +25,71 @@ def rectangle_triangles(wall: RectangleWall) -> np.ndarray:
     return np.array([[o, o + a, o + a + b], [o, o + a + b, o + b]])
 
 
+# A mesh is read whole into memory and checked triangle by triangle (vectorised): a binary STL of a
+# million triangles is 50 MB and takes about a second. Larger files or counts are refused.
+MAX_MESH_BYTES = 128 * 2**20
+MAX_TRIANGLES = 2_000_000
+# Every vertex of a scaled mesh lies within the case's coordinate range (case.Coordinate).
+MAX_COORDINATE = 1e4
+_VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)")
+
+
 def mesh_triangles(wall: MeshWall, case_dir: Path) -> np.ndarray:
-    """Triangles of an STL file (ASCII or binary), scaled by `wall.scale`."""
-    path = (case_dir / wall.file).resolve()
+    """Triangles (t, 3, 3) of an STL file (ASCII or binary), scaled by `wall.scale`; CaseError naming
+    the wall when the file is not a regular file of at most MAX_MESH_BYTES, holds no or more than
+    MAX_TRIANGLES triangles, a vertex that is not finite or beyond MAX_COORDINATE once scaled, or a
+    triangle of zero area (an engine would stop on it)."""
+    path = case_dir / wall.file
+    field = f"walls.{wall.name}.file"
     try:
-        with warnings.catch_warnings():
-            # meshio first reads an ASCII STL as binary (its triangle count overflows): a warning of
-            # meshio's own format detection, not a problem of the file.
-            warnings.simplefilter("ignore", RuntimeWarning)
-            mesh = meshio.read(path, file_format="stl")
-    except (OSError, meshio.ReadError, ValueError) as error:
-        raise CaseError(f"walls.{wall.name}.file: cannot read STL mesh {path} ({error})") from None
-    triangles = [block.data for block in mesh.cells if block.type == "triangle"]
-    if not triangles:
-        raise CaseError(f"walls.{wall.name}.file: {path} holds no triangles")
-    indices = np.concatenate(triangles)
-    return mesh.points[indices] * wall.scale
+        data = read_capped(path, "STL mesh", MAX_MESH_BYTES)
+    except CaseError as error:
+        raise CaseError(f"{field}: {error}") from None
+    triangles = _parse_stl(data)
+    if triangles is None or not len(triangles):
+        raise CaseError(f"{field}: {path} holds no triangles (not an ASCII or binary STL mesh)")
+    if len(triangles) > MAX_TRIANGLES:
+        raise CaseError(f"{field}: {path} holds {len(triangles)} triangles; allowed: at most {MAX_TRIANGLES}")
+    finite = np.isfinite(triangles).all(axis=(1, 2))
+    if not finite.all():
+        raise CaseError(f"{field}: triangle {int(np.argmin(finite))} of {path} has a vertex that is not a finite number; "
+                        "allowed: finite coordinates")
+    triangles = triangles * wall.scale
+    reach = float(np.abs(triangles).max())
+    if reach > MAX_COORDINATE:
+        raise CaseError(f"walls.{wall.name}.scale: {wall.scale!r} puts a vertex {reach:.3g} m from the origin; allowed: every "
+                        f"vertex within {MAX_COORDINATE:g} m (a scale of at most {wall.scale * MAX_COORDINATE / reach:.3g})")
+    flat = np.flatnonzero(triangle_areas(triangles) <= 1e-12 * _longest_edges(triangles) ** 2)
+    if len(flat):
+        raise CaseError(f"{field}: triangle {int(flat[0])} of {path} has zero area ({len(flat)} such triangle{'s' if len(flat) > 1 else ''}); "
+                        "remove degenerate triangles from the mesh")
+    return triangles
+
+
+def _parse_stl(data: bytes) -> np.ndarray | None:
+    """(t, 3, 3) float vertices of a binary STL (its size matches its triangle count, as meshio tells
+    the two apart) or an ASCII one (its `vertex x y z` lines); None when neither."""
+    if len(data) >= 84:
+        count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
+        if 84 + 50 * count == len(data):
+            record = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+            return np.frombuffer(data, dtype=record, offset=84)["vertices"].astype(float)
+    found = _VERTEX.findall(data)
+    if not found or len(found) % 3:
+        return None
+    try:
+        return np.array(found).astype(float).reshape(-1, 3, 3)
+    except ValueError:
+        return None
+
+
+def triangle_areas(triangles: np.ndarray) -> np.ndarray:
+    """(t,) areas of (t, 3, 3) triangles."""
+    return 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1)
+
+
+def _longest_edges(triangles: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
 
 
 def wall_triangles(wall: Wall, case_dir: Path) -> np.ndarray:

@@ -2,8 +2,9 @@
 
 Each check raises CaseError with one line naming the field (and the body, by index) and what would
 do instead:
-- the time step against the shortest contact duration: an explicit engine needs several steps per
-  contact (MAX_STEP_FRACTION), or contacts are skipped and bodies leave at any speed;
+- the time step, given or automatic, within (0, MAX_STEP] and at most MAX_STEPS steps; against the
+  shortest contact duration: an explicit engine needs several steps per contact (MAX_STEP_FRACTION),
+  or contacts are skipped and bodies leave at any speed;
 - initial speeds against the step: a body may cross at most a tenth of the smallest radius per step;
 - the output: frame count and results size (contacts included), capped (MAX_FRAMES, MAX_RESULTS_BYTES);
   what the machine can hold is checked where the run directory is known (estimate.check_machine);
@@ -28,6 +29,9 @@ from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
 MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
+MAX_STEP = 1e-2  # s, as time.step allows: the automatic step is held to it too
+MAX_STEPS = 2**31 - 1  # LIGGGHTS (after LAMMPS) refuses `run N` beyond a 32-bit count
+OUTPUT_ROUNDING = 0.01  # an output interval rounded to whole steps by more than this fraction is reported
 MAX_FRAMES = 1_000_000
 MAX_RESULTS_BYTES = 4 * 2**30  # results.h5 holds 13 doubles per body and frame
 # Of the smaller radius: a settled packing carries its contact overlaps (m g / k_n, about 1e-3 of a
@@ -41,20 +45,39 @@ def check_all(case: Case, case_dir: Path, plan: physics.Schedule, table: Sequenc
 
     Called by `orchestrator.plan.make_plan` with the numbers the run will use (its schedule, body
     table, wall triangles (one (t, 3, 3) array per wall) and output estimate), so they are computed once."""
-    check_step(case, plan.dt)
+    check_step(case, plan)
     check_output(case, output)
     check_speeds(case, plan.dt, table)
     check_geometry(case, table, triangles)
     check_initial_state(case, case_dir)
 
 
-def check_step(case: Case, dt: float) -> None:
+def check_step(case: Case, plan: physics.Schedule) -> None:
+    dt = plan.dt
+    if not 0.0 < dt <= MAX_STEP:  # the automatic step of very soft contacts (contacts.0.kn 1e-300 gave 8e146 s)
+        index, pair = max(enumerate(case.contacts), key=lambda item: item[1].kn)
+        raise CaseError(f"contacts.{index}.kn: {pair.kn!r} N/m makes the automatic time.step {dt:.3g} s; allowed range of the "
+                        f"step: (0, {MAX_STEP:g}] s: stiffen the contacts or give time.step")
+    if plan.total_steps > MAX_STEPS:
+        raise CaseError(f"time.duration: {case.time.duration!r} s is {plan.total_steps:.3g} steps of {dt:.3g} s; allowed: at most "
+                        f"{MAX_STEPS} steps (the engines count steps in 32 bits), a duration of at most {MAX_STEPS * dt:.4g} s at this step")
     if case.time.step == "auto" or capabilities(case.engine).implicit:
         return
     duration = physics.shortest_contact_duration(case)
     if dt > MAX_STEP_FRACTION * duration:
         raise CaseError(f"time.step: {dt!r} s is more than {MAX_STEP_FRACTION:g} of the shortest contact ({duration:.3g} s), "
                         f"so contacts would be missed; allowed range: (0, {MAX_STEP_FRACTION * duration:.3g}] (or step: auto)")
+
+
+def notes(case: Case, plan: physics.Schedule) -> list[str]:
+    """What a valid case gets from its schedule `plan` that differs from what it asks, as one-line
+    warnings: an output interval that is not a whole number of steps is rounded to one (one at the least)."""
+    used = plan.output_every * plan.dt
+    if abs(used - case.time.output_interval) <= OUTPUT_ROUNDING * case.time.output_interval:
+        return []
+    return [f"time.output_interval: {case.time.output_interval!r} s is not a whole number of steps of {plan.dt:.4g} s; "
+            f"a frame is written every {plan.output_every} step{'s' if plan.output_every > 1 else ''} ({used:.4g} s), "
+            f"{plan.frames + 1} frames in all"]
 
 
 def check_output(case: Case, output: OutputEstimate) -> None:
@@ -88,7 +111,7 @@ def check_geometry(case: Case, table: Sequence[physics.BodyInfo], wall_triangles
         glued = np.array([s.fixed for s in spheres])
         _check_overlaps(centres, radii, glued)
         for wall, triangles in zip(case.walls, wall_triangles):
-            gaps = np.where(glued, np.inf, _distance_to_triangles(centres, triangles) - radii)  # glued: never moved by a wall
+            gaps = np.where(glued, np.inf, _distance_to_triangles(centres, triangles, float(radii.max())) - radii)  # glued: never moved by a wall
             worst = int(np.argmin(gaps))
             if gaps[worst] < -OVERLAP_TOLERANCE * radii[worst]:
                 raise CaseError(f"bodies.spheres.{worst}.position: the sphere cuts wall {wall.name!r} by {-gaps[worst]:.3g} m; "
@@ -132,33 +155,41 @@ def _check_overlaps(centres: np.ndarray, radii: np.ndarray, glued: np.ndarray) -
                         f"({len(bad)} overlapping pairs); spheres may touch, not overlap")
 
 
-def _distance_to_triangles(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """(n,) distance from each point to the nearest of the (t, 3, 3) triangles."""
+def _distance_to_triangles(points: np.ndarray, triangles: np.ndarray, reach: float) -> np.ndarray:
+    """(n,) distance from each point to the nearest of the (t, 3, 3) triangles, where that is at most
+    `reach`; inf where no triangle comes that close. Only the pairs a k-d tree of the points finds
+    near each triangle (its centroid's ball through its vertices, widened by `reach`) are measured,
+    all at once: a mesh of a million triangles takes a second or two."""
+    centroids = triangles.mean(axis=1)
+    sizes = np.linalg.norm(triangles - centroids[:, None], axis=2).max(axis=1)
+    near = cKDTree(points).query_ball_point(centroids, sizes + reach)
+    counts = np.fromiter((len(found) for found in near), dtype=np.int64, count=len(near))
     best = np.full(len(points), np.inf)
-    for a, b, c in triangles:
-        best = np.minimum(best, _point_triangle_distance(points, a, b, c))
+    if counts.sum():
+        point = np.concatenate([found for found in near if found]).astype(np.int64)
+        triangle = np.repeat(np.arange(len(triangles)), counts)
+        np.minimum.at(best, point, _point_triangle_distance(points[point], triangles[triangle]))
     return best
 
 
-def _point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Distance from points p (n, 3) to triangle abc: the plane inside it, else the nearest edge."""
+def _point_triangle_distance(p: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Distance from each point p (n, 3) to its triangle (n, 3, 3) (no zero areas: geometry refuses
+    them): the plane inside the triangle, else the nearest edge."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     normal = np.cross(b - a, c - a)
-    area2 = float(np.linalg.norm(normal))
-    if area2 == 0.0:
-        return np.full(len(p), np.inf)
-    normal = normal / area2
-    height = (p - a) @ normal
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    height = np.einsum("nk,nk->n", p - a, normal)
     foot = p - height[:, None] * normal
     inside = np.ones(len(p), bool)
     for u, v in ((a, b), (b, c), (c, a)):
-        inside &= (np.cross(v - u, foot - u) @ normal) >= 0.0
+        inside &= np.einsum("nk,nk->n", np.cross(v - u, foot - u), normal) >= 0.0
     edges = np.min([_point_segment_distance(p, u, v) for u, v in ((a, b), (b, c), (c, a))], axis=0)
     return np.where(inside, np.abs(height), edges)
 
 
 def _point_segment_distance(p: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     d = v - u
-    t = np.clip(((p - u) @ d) / float(d @ d), 0.0, 1.0)
+    t = np.clip(np.einsum("nk,nk->n", p - u, d) / np.einsum("nk,nk->n", d, d), 0.0, 1.0)
     return np.linalg.norm(p - (u + t[:, None] * d), axis=1)
 
 

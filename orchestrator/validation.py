@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import errno
+import os
 import reprlib
+import stat
 from pathlib import Path
 from typing import TypeVar, Union, get_args, get_origin
 
@@ -142,16 +145,38 @@ class _StrictLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ign
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _StrictLoader.construct_mapping)
 
 
-def read_yaml(path: str | Path, what: str = "case file") -> object:
-    """The YAML document in `path` (strict safe loader: no duplicate keys, no aliases, at most 16 MB),
-    or CaseError naming the file and the problem."""
+def read_capped(path: str | Path, what: str, limit: int = MAX_FILE_BYTES) -> bytes:
+    """The bytes of the regular file `path`, at most `limit` of them, or CaseError naming the file.
+
+    Bounded whatever `path` is: a FIFO or a device (/dev/zero) is refused before a byte is read (it
+    is opened without blocking and checked with fstat), a symlink loop is an error, and the read
+    stops at limit + 1 bytes, so a file that grows, or reports size 0, cannot exhaust memory."""
     path = Path(path)
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise CaseError(f"{path}: the {what} is over {MAX_FILE_BYTES // 2**20} MB")
-        text = path.read_text(encoding="utf-8")
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as error:
-        raise CaseError(f"{path}: cannot read the {what} ({error.strerror})") from None
+        reason = "a symlink loop" if error.errno == errno.ELOOP else error.strerror
+        raise CaseError(f"{path}: cannot read the {what} ({reason})") from None
+    with os.fdopen(descriptor, "rb") as handle:
+        mode = os.fstat(descriptor).st_mode
+        if not stat.S_ISREG(mode):
+            kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "a device or socket"
+            raise CaseError(f"{path}: cannot read the {what} (it is {kind}, not a regular file)")
+        try:
+            data = handle.read(limit + 1)
+        except OSError as error:
+            raise CaseError(f"{path}: cannot read the {what} ({error.strerror})") from None
+    if len(data) > limit:
+        raise CaseError(f"{path}: the {what} is over {limit // 2**20} MB; allowed: at most {limit // 2**20} MB")
+    return data
+
+
+def read_yaml(path: str | Path, what: str = "case file") -> object:
+    """The YAML document in `path` (strict safe loader: no duplicate keys, no aliases, a regular file
+    of at most 16 MB), or CaseError naming the file and the problem."""
+    path = Path(path)
+    try:
+        text = read_capped(path, what).decode("utf-8")
     except UnicodeDecodeError:
         raise CaseError(f"{path}: the {what} is not UTF-8 text") from None
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any, Callable
 
@@ -54,6 +55,25 @@ class OneLineErrors(click.Group):
 def fail(message: str, code: int = 2) -> None:
     errors.print(f"[bold red]error:[/] {message}", markup=True, highlight=False, soft_wrap=True)
     sys.exit(code)
+
+
+def warn(message: str) -> None:
+    """One line on stderr: what a valid input gets that differs from what it asked."""
+    errors.print(f"[yellow]warning:[/] {message}", markup=True, highlight=False, soft_wrap=True)
+
+
+MAX_TIMEOUT = 1e7  # s of wall time, about 16 weeks
+
+
+def writable_rundir(directory: Path) -> None:
+    """Create the run directory `directory` and check that files can be written in it, or fail with
+    one line (exit 2): a read-only file system or directory is the user's to fix, before any engine."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as error:
+        fail(f"--output: cannot write in {directory} ({error.strerror or error}); choose a writable directory")
 
 
 def default_rundir(case_name: str, engine: str) -> Path:

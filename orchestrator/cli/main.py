@@ -24,30 +24,38 @@ from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
 from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
-from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, OneLineErrors, console, errors, default_rundir, fail, metrics_table, progress_callback, run_options
+from orchestrator.cli.common import (DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, errors, default_rundir, fail,
+                                     metrics_table, progress_callback, run_options, warn, writable_rundir)
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
+from orchestrator import preflight
 from orchestrator.estimate import check_machine
-from orchestrator.plan import make_plan
+from orchestrator.plan import RunPlan, make_plan
 from orchestrator.post import summary as metrics
 from orchestrator.results import REPORT, RUN_RECORD, read_results
 from orchestrator.rundir import read_json
 from orchestrator.validation import bounded
 from orchestrator.runner import RESULTS, render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
+from orchestrator import rundir as rundir_module
+from orchestrator.capabilities import capabilities
 
 
 def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
     try:
         case = with_engine(load_case(case_path), engine)
         plan = make_plan(case, case_path.parent)  # the pre-flight checks, before the progress bar: a bad case is one line
+        options = _options_for(plan)
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
         large = check_machine(plan.output, rundir)
         if large:
-            errors.print(f"[yellow]warning:[/] {large}", markup=True, highlight=False, soft_wrap=True)
-        resume = None if rundir_lock_held(rundir) else resume_point(plan, rundir)
+            warn(large)
+        writable_rundir(rundir)
+        if rundir_lock_held(rundir):
+            raise rundir_module.Busy(str(rundir))
+        resume = resume_point(plan, rundir)
         if resume is not None:
             console.print(f"{rundir}: resuming from the checkpoint at t = {resume.step * plan.schedule.dt:.4g} s "
                           f"(segment {resume.segment}; the run was cut off)")
@@ -61,17 +69,34 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
             transient=False,
         ) as progress:
             task = progress.add_task("starting", total=case.time.duration)
-            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout, options=run_options(),
+            record = run_case(case, case_path.parent, rundir, progress=progress_callback(progress, task), timeout=timeout, options=options,
                               plan=plan)
     except CaseError as error:
         fail(str(error))
+    except rundir_module.Busy:
+        fail(f"--output: {rundir} is in use by another run (its lock is held); wait for that run or choose another -o")
     except EngineError as error:
         fail(str(error), code=3)
     console.print(metrics_table(f"{case.name} on {record['engine']} ({record['wall_time_s']:.2f} s wall)", record["metrics"]))
     for warning in record.get("warnings", []):
-        errors.print(f"[yellow]warning:[/] {warning}", markup=True, highlight=False, soft_wrap=True)
+        warn(warning)
     console.print(f"results: {rundir / RESULTS}")
     return record
+
+
+def _options_for(plan: RunPlan) -> RunOptions:
+    """The command's run options for the plan's case (MPI processes checked, and capped at one per
+    body), the case's notes (an output interval rounded to whole steps) printed as one-line warnings."""
+    options, capped = run_options().for_bodies(len(plan.bodies))
+    for note in preflight.notes(plan.case, plan.schedule) + ([capped] if capped and capabilities(plan.case.engine).mpi else []):
+        warn(note)
+    return options
+
+
+def _timeout(value: float | None) -> float | None:
+    if value is not None and not 0.0 < value <= MAX_TIMEOUT:  # NaN too
+        raise click.BadParameter(f"must be seconds of wall time; allowed range: (0, {MAX_TIMEOUT:g}] (got {value!r})")
+    return value
 
 
 def _interval(value: str | None) -> float | None:
@@ -113,7 +138,8 @@ def render(case_path: Path, engine: str | None, output: Path) -> None:
 @click.argument("case_path", type=click.Path(path_type=Path))
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the case's engine.")
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Run directory (default runs/NAME-ENGINE-TIME).")
-@click.option("--timeout", type=float, default=None, help="Stop the engine after this many seconds.")
+@click.option("--timeout", type=float, default=None, callback=lambda context, parameter, value: _timeout(value),
+              help="Stop the engine after this many seconds of wall time.")
 def run_command(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> None:
     """Run CASE_PATH and collect results.h5 and run.json."""
     _run(case_path, engine, output, timeout)

@@ -10,6 +10,7 @@ study's preferred split (`default_grid`), then the engine's own choice.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import asdict, dataclass
@@ -58,6 +59,17 @@ class RunOptions:
             return check_processes(str(self.mpi_processes), "--mpi")
         return check_processes(os.environ.get(MPI_ENV, "1").strip() or "1", MPI_ENV)
 
+    def for_bodies(self, bodies: int) -> tuple["RunOptions", str | None]:
+        """These options with at most one MPI process per body (a process without a body only adds
+        start-up and communication), and a one-line warning when that lowered the count."""
+        requested = self.processes()
+        if requested <= max(1, bodies):
+            return self, None
+        used = max(1, bodies)
+        return dataclasses.replace(self, mpi_processes=used), (
+            f"--mpi {requested}: the case has {bodies} bod{'y' if bodies == 1 else 'ies'}, so {used} MPI "
+            f"process{'es' if used > 1 else ''} (at most one per body)")
+
     def grid(self) -> str:
         if self.processor_grid is not None:
             return check_grid(self.processor_grid, "processor_grid")
@@ -71,7 +83,7 @@ class RunOptions:
 
 def check_processes(value: str, name: str) -> int:
     """A whole number of MPI processes in [1, 256], or a CaseError naming the setting."""
-    if not value.isdigit() or not 1 <= int(value) <= MAX_PROCESSES:
+    if not (value.isascii() and value.isdigit()) or not 1 <= int(value) <= MAX_PROCESSES:  # '²' is a digit to str.isdigit
         raise CaseError(f"{name}={value!r}: must be a whole number of MPI processes; allowed range: 1 to {MAX_PROCESSES}")
     return int(value)
 
