@@ -185,10 +185,7 @@ class Clump(Strict):
     def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
         """Normalised, but kept to the bit when already unit (to 1e-12): renormalising moves last bits, so a
         case read back from case.json would hash to another run id and a finished run never be reused."""
-        norm = math.sqrt(sum(v * v for v in value))
-        if not 1e-9 <= norm < math.inf and max(map(abs, value)) > 0.0:  # the squares overflowed or underflowed: rescale first
-            value = tuple(v / max(map(abs, value)) for v in value)  # type: ignore[assignment]
-            norm = math.sqrt(sum(v * v for v in value))
+        norm = math.hypot(*value)  # no overflow: (1e200, 0, 0, 0) is the identity, not zeros
         if norm < 1e-9:
             raise ValueError("must be a non-zero quaternion (w, x, y, z)")
         return value if abs(norm - 1.0) <= 1e-12 else tuple(v / norm for v in value)  # type: ignore[return-value]

@@ -15,8 +15,6 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-import numpy as np
-
 from orchestrator import __version__, rundir
 from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
@@ -25,6 +23,7 @@ from orchestrator.engines.base import LOG_NAME, ProgressCallback
 from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
+from orchestrator.post.lost import lost_bodies
 from orchestrator.results import Trajectory, write_results
 
 RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
@@ -170,15 +169,11 @@ def _segments(plan: RunPlan, directory: Path) -> list[dict[str, Any]]:
 
 
 def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> None:
-    """Every engine ends a run whose bodies left the domain the same way (LIGGGHTS drops such bodies
-    and says so; YADE and cocd would carry them on): an EngineError naming the first frame."""
-    domain = plan.domain
-    position = trajectory.position
-    outside = np.isfinite(position).all(axis=2) & ((position < np.asarray(domain.lower)) | (position > np.asarray(domain.upper))).any(axis=2)
-    if outside.any():
-        frame = int(np.flatnonzero(outside.any(axis=1))[0])
-        raise EngineError(f"{int(outside[frame].sum())} bodies left the simulation domain by t = {trajectory.time[frame]:.4g} s; "
-                          "enlarge `domain:` in the case", deck, deck.parent / LOG_NAME)
+    """Every engine ends a run whose bodies left the domain the same way (LIGGGHTS drops such bodies,
+    YADE and cocd would carry them on): an EngineError counting them by one rule (post.lost)."""
+    lost = lost_bodies(trajectory, plan.domain.lower, plan.domain.upper)
+    if len(lost):
+        raise EngineError(lost.message(), deck, deck.parent / LOG_NAME)
 
 
 def ensure_run(

@@ -157,11 +157,12 @@ def read_capped(path: str | Path, what: str, limit: int = MAX_FILE_BYTES) -> byt
     except OSError as error:
         reason = "a symlink loop" if error.errno == errno.ELOOP else error.strerror
         raise CaseError(f"{path}: cannot read the {what} ({reason})") from None
+    mode = os.fstat(descriptor).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(descriptor)
+        kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "a device or socket"
+        raise CaseError(f"{path}: cannot read the {what} (it is {kind}, not a regular file)")
     with os.fdopen(descriptor, "rb") as handle:
-        mode = os.fstat(descriptor).st_mode
-        if not stat.S_ISREG(mode):
-            kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "a device or socket"
-            raise CaseError(f"{path}: cannot read the {what} (it is {kind}, not a regular file)")
         try:
             data = handle.read(limit + 1)
         except OSError as error:

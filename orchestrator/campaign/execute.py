@@ -4,8 +4,9 @@ Each run is performed by `perform` in a worker process (or Dask worker). It take
 directory's lock first and gives the point up when another process holds it or has completed it,
 so two launches on one campaign directory never run a point twice. A crashed run is recorded
 (run.json with the log tail) and the campaign goes on. Workers and engines die with the campaign
-process (PR_SET_PDEATHSIG) and the lock dies with them, so the next launch finds those runs
-`incomplete`, moves what they left to the attic and runs them again.
+process (PR_SET_PDEATHSIG; a worker whose campaign died while it was starting exits at once) and
+the lock dies with them, so the next launch finds those runs `incomplete`, moves what they left to
+the attic and runs them again.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import concurrent.futures as futures
 import dataclasses
 import multiprocessing
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -188,10 +190,21 @@ def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None
             plan.options.as_dict())
 
 
+def start_worker(campaign: int) -> None:
+    """A pool worker's first act: die with the campaign process `campaign` at every moment of its life.
+
+    PR_SET_PDEATHSIG kills the worker when the campaign dies from then on; a campaign killed earlier,
+    while the worker was still starting (importing the package takes a second or two), has left it
+    an orphan that no signal will reach, so the worker then checks its parent and exits at once."""
+    die_with_parent()
+    if os.getppid() != campaign:
+        os._exit(1)
+
+
 def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:
     """Run on a local process pool; yields each run's summary as it finishes."""
     context = multiprocessing.get_context("spawn")
-    with futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=die_with_parent) as pool:
+    with futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=start_worker, initargs=(os.getpid(),)) as pool:
         pending = {pool.submit(perform, *_arguments(plan, identifier)) for identifier in plan.to_run}
         for future in futures.as_completed(pending):
             yield future.result()

@@ -24,7 +24,7 @@ from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
 from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
-from orchestrator.cli.common import (DAMAGE, EXIT_DAMAGED, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, errors, default_rundir, fail,
+from orchestrator.cli.common import (DAMAGE, EXIT_DAMAGED, EXIT_ENGINE, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, errors, default_rundir, fail,
                                      metrics_table, progress_callback, run_options, warn, writable_rundir)
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
@@ -32,6 +32,7 @@ from orchestrator import preflight
 from orchestrator.estimate import check_machine
 from orchestrator.plan import RunPlan, make_plan
 from orchestrator.post import summary as metrics
+from orchestrator.post.lost import NoBodyLeft
 from orchestrator.results import REPORT, RUN_RECORD, read_results
 from orchestrator.rundir import read_json
 from orchestrator.validation import bounded
@@ -154,6 +155,8 @@ def post(rundir: Path, as_json: bool) -> None:
         _post(rundir, as_json)
     except CaseError as error:
         fail(str(error))
+    except NoBodyLeft as error:  # intact results of a run that lost every body: the engine's outcome, not damage
+        fail(f"{rundir}: {error}; rerun with a larger `domain:`", code=EXIT_ENGINE)
     except DAMAGE as error:  # a truncated, empty or foreign file where a result should be
         fail(f"{rundir}: damaged results ({bounded(f'{type(error).__name__}: {error}', 200)}); rerun the case", code=EXIT_DAMAGED)
 

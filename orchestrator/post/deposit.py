@@ -28,6 +28,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from orchestrator.post.lost import require_bodies
+
 
 @dataclass(frozen=True)
 class DepositMetrics:
@@ -75,7 +77,9 @@ def deposit_metrics(
     radius: np.ndarray,
     link_distance: float | None = None,
 ) -> DepositMetrics:
-    """Metrics from initial and final body centres (B, 3) in the frame described in the module docstring."""
+    """Metrics from initial and final body centres (B, 3) in the frame described in the module docstring;
+    NoBodyLeft (a ValueError) when every body was lost."""
+    require_bodies(final, "deposit")
     present = np.isfinite(final).all(axis=1)
     keep = deposit_members(final, radius, link_distance)
     x, y, z, r = final[:, 0], final[:, 1], final[:, 2], radius

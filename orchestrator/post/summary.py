@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from orchestrator.post.lost import require_bodies
 from orchestrator.results import Trajectory
 
 REST_SPEED = 1e-3  # m/s: a body slower than this counts as at rest
@@ -41,7 +42,9 @@ def _rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def summary(trajectory: Trajectory) -> dict[str, float]:
-    """Scalars a person checks first: extent of motion, speeds, how much has come to rest."""
+    """Scalars a person checks first: extent of motion, speeds, how much has come to rest; NoBodyLeft
+    (a ValueError) when every body was lost by the last frame."""
+    require_bodies(trajectory.position[-1], "results.h5")
     com = centre_of_mass(trajectory)
     speed = np.linalg.norm(trajectory.velocity, axis=2)
     final_speed = speed[-1]

@@ -31,14 +31,14 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
     Orientation: the rotation R that best maps the template's sphere centres onto the dumped ones
     (Kabsch, by a batched SVD), as a (w, x, y, z) quaternion of the brick frame. Centre: the brick's
     centre of mass, mean of the sphere centres − R × the template's mean (zero on a box; not on a
-    bevelled brick). Velocity: mean sphere velocity. Spin: the spheres carry their body's. Bodies are matched to the case's clumps by their
+    bevelled brick). A clump that lost a sphere (dropped from the box) is NaN from then on. Velocity: mean sphere velocity. Spin: the spheres carry their body's. Bodies are matched to the case's clumps by their
     nearest requested position in the first frame (insertion places them within 1 mm).
     """
     from scipy.spatial import cKDTree
 
     clumps = case.bodies.clumps
     templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
-    template_means = np.array([t.mean(axis=0) for t in templates])
+    template_means, sizes = np.array([t.mean(axis=0) for t in templates]), np.array([len(t) for t in templates])
     shape = (len(frames), len(clumps))
     position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))
     orientation = np.full(shape + (4,), np.nan)
@@ -69,7 +69,8 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
             if new.any():
                 _, nearest = cKDTree(requested).query(centre[new])
                 slot_of[ids[new]] = np.atleast_1d(nearest)
-            slots = slot_of[ids]
+            whole = sizes[slot_of[ids]] == size  # a clump missing a sphere (dropped from the box) is lost: NaN
+            slots, centre, group = slot_of[ids][whole], centre[whole], group[whole]
             position[f, slots] = centre
             velocity[f, slots] = group[:, :, vxyz].mean(axis=1)
             spin[f, slots] = group[:, 0, wxyz]
