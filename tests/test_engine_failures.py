@@ -62,5 +62,5 @@ def test_bodies_leaving_the_domain_are_reported(tmp_path: Path) -> None:
     data["domain"] = {"lower": [-0.1, -0.1, 0.99], "upper": [0.1, 0.1, 1.1]}  # the sphere falls out
     from orchestrator.case import parse_case
 
-    with pytest.raises(EngineError, match=r"1 spheres left the simulation domain"):
+    with pytest.raises(EngineError, match=r"^1 body left the simulation domain \(body 0 at t = "):
         run_case(parse_case(data), tmp_path, tmp_path / "run")

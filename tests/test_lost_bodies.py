@@ -1,0 +1,81 @@
+"""Bodies lost from a run, counted one way on every engine (post.lost): three spheres shot out of
+the domain were reported as 3 spheres at LIGGGHTS' last step, 1 body on YADE and 2 on cocd."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.case import parse_case
+from orchestrator.engines import EngineError
+from orchestrator.post.deposit import deposit_metrics
+from orchestrator.post.lost import NoBodyLeft, lost_bodies
+from orchestrator.results import Trajectory, write_results
+from orchestrator.runner import run_case
+
+from conftest import assert_one_line_error, run_cli
+
+HALF_WIDTH, INTERVAL = 0.05, 0.005
+SPEEDS = (1.0, 2.0, 3.0)  # m/s along x from the centre: they leave at 0.05, 0.025 and 0.0167 s
+
+
+def three_leaving(engine: str) -> dict:
+    ball = {"material": "glass", "radius": 0.004}
+    return {"name": "leave", "engine": engine, "time": {"step": 1.0e-5, "duration": 0.08, "output_interval": INTERVAL},
+            "gravity": [0.0, 0.0, 0.0], "materials": [{"name": "glass", "density": 2500.0}],
+            "contacts": [{"materials": ["glass", "glass"], "en2": 0.5, "mu": 0.5, "kn": 1.0e5, "kt_over_kn": 0.4}],
+            "bodies": {"spheres": [{**ball, "position": [0.0, y, 0.0], "velocity": [speed, 0.0, 0.0]}
+                                   for y, speed in zip((-0.02, 0.0, 0.02), SPEEDS)]},
+            "domain": {"lower": [-HALF_WIDTH] * 3, "upper": [HALF_WIDTH] * 3}}
+
+
+@pytest.mark.engine
+@pytest.mark.parametrize("engine", ["liggghts", "yade", "cocd"])
+def test_three_spheres_leaving_are_counted_alike_with_their_times(engine: str, tmp_path: Path) -> None:
+    with pytest.raises(EngineError) as caught:
+        run_case(parse_case(three_leaving(engine)), tmp_path, tmp_path / "run")
+    message = caught.value.summary
+    assert message.startswith("3 bodies left the simulation domain (bodies 2 at t = "), message
+    left = {int(body): float(t) for body, t in re.findall(r"(\d) at t = ([0-9.e-]+) s", message)}
+    assert sorted(left) == [0, 1, 2], message
+    for body, speed in enumerate(SPEEDS):  # the first frame found outside: within one output interval after the crossing
+        crossing = HALF_WIDTH / speed
+        assert crossing <= left[body] + 1e-9 <= crossing + INTERVAL + 1e-6, (body, left[body], crossing)
+
+
+def trajectory(position: np.ndarray) -> Trajectory:
+    frames, bodies = position.shape[:2]
+    return Trajectory(time=np.arange(frames) * 0.1, ids=np.arange(bodies), material=np.array(["m"] * bodies), mass=np.ones(bodies),
+                      radius=np.full(bodies, 0.01), inertia=np.full((bodies, 3), 1e-5), position=position,
+                      velocity=np.zeros_like(position), angular_velocity=np.zeros_like(position),
+                      orientation=np.full((frames, bodies, 4), np.nan))
+
+
+def test_one_lost_body_is_singular_and_nan_and_outside_count_alike() -> None:
+    position = np.zeros((4, 3, 3))
+    position[2:, 0] = np.nan  # dropped by the engine at frame 2
+    position[1:, 2, 0] = 5.0  # carried on outside the domain from frame 1
+    lost = lost_bodies(trajectory(position), (-1.0, -1.0, -1.0), (1.0, 1.0, 1.0))
+    assert list(lost.bodies) == [2, 0] and np.allclose(lost.times, [0.1, 0.2])
+    assert lost.message().startswith("2 bodies left the simulation domain (bodies 2 at t = 0.1 s, 0 at t = 0.2 s)")
+    alone = lost_bodies(trajectory(position[:, :1]))
+    assert alone.message().startswith("1 body left the simulation domain (body 0 at t = 0.2 s)")
+
+
+def test_a_deposit_where_every_body_was_lost_says_so() -> None:
+    final = np.full((3, 3), np.nan)
+    with pytest.raises(NoBodyLeft, match="deposit: all 3 bodies were lost by the last frame"):
+        deposit_metrics(np.zeros((3, 3)), final, np.ones(3), np.full(3, 0.01))
+
+
+def test_post_on_a_result_that_lost_every_body_is_an_engine_failure(tmp_path: Path) -> None:
+    """Exit 3, not 5: the file is intact (not damaged) and the case was valid (not 2); the run's outcome
+    is that the engine kept no body, which `demorch run` reports as an engine failure too."""
+    position = np.zeros((3, 2, 3))
+    position[1:] = np.nan
+    write_results(tmp_path / "results.h5", trajectory(position))
+    assert_one_line_error(*run_cli(["post", str(tmp_path)]), expected_code=3, field="all 2 bodies were lost by the last frame")
+    assert_one_line_error(*run_cli(["post", str(tmp_path), "--json"]), expected_code=3, field="no metric can be measured")
