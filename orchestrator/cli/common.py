@@ -14,6 +14,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 from orchestrator.engines import RunOptions
+from orchestrator.rundir import Busy
 
 def run_options() -> RunOptions:
     """How engines run (`demorch --mpi N`), kept by the main command for its subcommands."""
@@ -46,6 +47,8 @@ class OneLineErrors(click.Group):
             code = super().main(*args, standalone_mode=False, **kwargs)
         except click.exceptions.Abort:
             fail("interrupted", code=EXIT_UNEXPECTED)
+        except Busy as error:  # a study's or a release's run directory held by another demorch: usage, not a fault
+            fail(f"{error}; wait for that run or use another -o")
         except click.ClickException as error:
             where = f" (see `{error.ctx.command_path} --help`)" if getattr(error, "ctx", None) is not None else ""
             fail(f"{error.format_message()}{where}", code=error.exit_code)
