@@ -37,6 +37,7 @@ MAX_RESULTS_BYTES = 4 * 2**30  # results.h5 holds 13 doubles per body and frame
 # Of the smaller radius: a settled packing carries its contact overlaps (m g / k_n, about 1e-3 of a
 # radius in the shipped set-ups) into the release; coincident or deeply nested spheres are typos.
 OVERLAP_TOLERANCE = 0.05
+TRIANGLE_CHUNK = 100_000  # triangles measured at once against the spheres (bounds the memory of a large mesh)
 
 
 def check_all(case: Case, case_dir: Path, plan: physics.Schedule, table: Sequence[physics.BodyInfo],
@@ -159,16 +160,16 @@ def _distance_to_triangles(points: np.ndarray, triangles: np.ndarray, reach: flo
     """(n,) distance from each point to the nearest of the (t, 3, 3) triangles, where that is at most
     `reach`; inf where no triangle comes that close. Only the pairs a k-d tree of the points finds
     near each triangle (its centroid's ball through its vertices, widened by `reach`) are measured,
-    all at once: a mesh of a million triangles takes a second or two."""
-    centroids = triangles.mean(axis=1)
-    sizes = np.linalg.norm(triangles - centroids[:, None], axis=2).max(axis=1)
-    near = cKDTree(points).query_ball_point(centroids, sizes + reach)
-    counts = np.fromiter((len(found) for found in near), dtype=np.int64, count=len(near))
-    best = np.full(len(points), np.inf)
-    if counts.sum():
-        point = np.concatenate([found for found in near if found]).astype(np.int64)
-        triangle = np.repeat(np.arange(len(triangles)), counts)
-        np.minimum.at(best, point, _point_triangle_distance(points[point], triangles[triangle]))
+    a chunk of triangles at a time: a mesh of a million triangles takes a second or two."""
+    tree, best = cKDTree(points), np.full(len(points), np.inf)
+    for start in range(0, len(triangles), TRIANGLE_CHUNK):
+        chunk = triangles[start:start + TRIANGLE_CHUNK]
+        centroids = chunk.mean(axis=1)
+        near = tree.query_ball_point(centroids, np.linalg.norm(chunk - centroids[:, None], axis=2).max(axis=1) + reach)
+        counts = np.fromiter((len(found) for found in near), dtype=np.int64, count=len(near))
+        if counts.sum():
+            point = np.concatenate([found for found in near if found]).astype(np.int64)
+            np.minimum.at(best, point, _point_triangle_distance(points[point], np.repeat(chunk, counts, axis=0)))
     return best
 
 
