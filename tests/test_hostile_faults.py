@@ -192,3 +192,10 @@ def test_an_output_interval_below_the_step_is_reported_with_what_is_used() -> No
     (note,) = preflight.notes(case)
     assert note.startswith("time.output_interval: 1e-09 s") and "every 1 step (1e-05 s), 2001 frames" in note
     assert preflight.notes(parse_case(case_data())) == []
+
+
+def test_a_case_file_over_the_cap_is_refused_by_what_is_read(tmp_path: Path, no_engine_process: None) -> None:
+    path = tmp_path / "case.yaml"
+    with path.open("wb") as handle:
+        handle.truncate(17 * 2**20)  # sparse: 17 MB of zeros on no disk
+    assert_one_line_error(*run_cli(["run", str(path), "-o", str(tmp_path / "run")]), expected_code=2, field="is over 16 MB")
