@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import yaml
 
-from orchestrator import preflight
+from orchestrator import physics, preflight
 from orchestrator.case import parse_case
 from orchestrator.rundir import locked
 
@@ -189,9 +189,10 @@ def test_an_orientation_of_1e200_is_the_identity_and_a_unit_one_is_kept() -> Non
 
 def test_an_output_interval_below_the_step_is_reported_with_what_is_used() -> None:
     case = parse_case(case_data(time={"step": 1e-5, "duration": 0.02, "output_interval": 1e-9}))
-    (note,) = preflight.notes(case)
+    (note,) = preflight.notes(case, physics.schedule(case))
     assert note.startswith("time.output_interval: 1e-09 s") and "every 1 step (1e-05 s), 2001 frames" in note
-    assert preflight.notes(parse_case(case_data())) == []
+    plain = parse_case(case_data())
+    assert preflight.notes(plain, physics.schedule(plain)) == []
 
 
 def test_a_case_file_over_the_cap_is_refused_by_what_is_read(tmp_path: Path, no_engine_process: None) -> None:
