@@ -31,6 +31,9 @@ MAX_MESH_BYTES = 128 * 2**20
 MAX_TRIANGLES = 2_000_000
 # Every vertex of a scaled mesh lies within the case's coordinate range (case.Coordinate).
 MAX_COORDINATE = 1e4
+# LIGGGHTS stops on a triangle with an angle closer to 180° than its mesh curvature (1 - 1e-5 as a
+# cosine: 0.256°), measured 2026-12-01 on a sliver of 179.9°: "Fix mesh: Bad mesh, cannot continue".
+MAX_ANGLE_DEG = 180.0 - float(np.degrees(np.arccos(1.0 - 1e-5)))
 _VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)")
 
 
@@ -38,7 +41,7 @@ def mesh_triangles(wall: MeshWall, case_dir: Path) -> np.ndarray:
     """Triangles (t, 3, 3) of an STL file (ASCII or binary), scaled by `wall.scale`; CaseError naming
     the wall when the file is not a regular file of at most MAX_MESH_BYTES, holds no or more than
     MAX_TRIANGLES triangles, a vertex that is not finite or beyond MAX_COORDINATE once scaled, or a
-    triangle of zero area (an engine would stop on it)."""
+    triangle of zero area or with an angle above MAX_ANGLE_DEG (an engine would stop on it)."""
     path = case_dir / wall.file
     field = f"walls.{wall.name}.file"
     try:
@@ -63,6 +66,11 @@ def mesh_triangles(wall: MeshWall, case_dir: Path) -> np.ndarray:
     if len(flat):
         raise CaseError(f"{field}: triangle {int(flat[0])} of {path} has zero area ({len(flat)} such triangle{'s' if len(flat) > 1 else ''}); "
                         "remove degenerate triangles from the mesh")
+    widest = _largest_angles(triangles)
+    if widest.max() > MAX_ANGLE_DEG:
+        worst = int(np.argmax(widest))
+        raise CaseError(f"{field}: triangle {worst} of {path} is a sliver (an angle of {widest[worst]:.4f}°); allowed: every angle "
+                        f"below {MAX_ANGLE_DEG:.2f}° (the mesh wall stops the engine otherwise)")
     return triangles
 
 
@@ -86,6 +94,13 @@ def _parse_stl(data: bytes) -> np.ndarray | None:
 def triangle_areas(triangles: np.ndarray) -> np.ndarray:
     """(t,) areas of (t, 3, 3) triangles."""
     return 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1)
+
+
+def _largest_angles(triangles: np.ndarray) -> np.ndarray:
+    """(t,) largest interior angle of each triangle, degrees (no zero-length edges)."""
+    after, before = np.roll(triangles, -1, axis=1) - triangles, np.roll(triangles, 1, axis=1) - triangles
+    cosines = np.einsum("tvk,tvk->tv", after, before) / (np.linalg.norm(after, axis=2) * np.linalg.norm(before, axis=2))
+    return np.degrees(np.arccos(np.clip(cosines.min(axis=1), -1.0, 1.0)))
 
 
 def _longest_edges(triangles: np.ndarray) -> np.ndarray:

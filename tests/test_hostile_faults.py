@@ -131,6 +131,7 @@ DEFECTS: dict[str, tuple[Any, str]] = {
     "radius_1e-300": (lambda d: case_data(bodies__spheres__0__radius=1e-300), "bodies.spheres.0.radius"),
     "density_1e-300": (lambda d: case_data(materials__0__density=1e-300), "materials.0.density"),
     "stl_zero_area_triangle": (stl_case(FLOOR + [[[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]]), "walls.m.file: triangle 2"),
+    "stl_sliver_triangle": (stl_case(FLOOR + [[[0, 0, 0], [1, 0, 0], [0.5, 0.001, 0]]]), "triangle 2 of"),
     "stl_nan_vertex": (stl_case(FLOOR + [[[np.nan, 0, 0], [0.5, 0, 0], [1, 1, 0]]]), "walls.m.file: triangle 2"),
     "stl_inf_vertex": (stl_case(FLOOR + [[[np.inf, 0, 0], [0.5, 0, 0], [1, 1, 0]]]), "walls.m.file: triangle 2"),
     "mesh_at_scale_1e6": (stl_case(FLOOR, scale=1e6), "walls.m.scale"),
