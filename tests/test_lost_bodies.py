@@ -38,6 +38,7 @@ def test_three_spheres_leaving_are_counted_alike_with_their_times(engine: str, t
     with pytest.raises(EngineError) as caught:
         run_case(parse_case(three_leaving(engine)), tmp_path, tmp_path / "run")
     message = caught.value.summary
+    assert caught.value.tail and caught.value.deck is not None, "an engine failure keeps its deck and log tail"
     assert message.startswith("3 bodies left the simulation domain (bodies 2 at t = "), message
     left = {int(body): float(t) for body, t in re.findall(r"(\d) at t = ([0-9.e-]+) s", message)}
     assert sorted(left) == [0, 1, 2], message
