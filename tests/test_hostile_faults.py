@@ -167,10 +167,11 @@ def test_a_busy_run_directory_is_a_usage_error(tmp_path: Path, no_engine_process
 
 
 def test_an_unwritable_run_directory_is_a_usage_error(tmp_path: Path, no_engine_process: None) -> None:
-    """A read-only directory (a read-only file system under root, whom permissions do not stop)."""
+    """A read-only directory; under root, whom permissions do not stop, a directory below a file."""
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case_data()))
     if os.geteuid() == 0:
-        target = Path("/sys/demorch-run")
+        (tmp_path / "a_file").write_text("x")
+        target = tmp_path / "a_file" / "run"
     else:
         (tmp_path / "locked").mkdir(mode=0o555)
         target = tmp_path / "locked" / "run"
