@@ -12,6 +12,7 @@ import numpy as np
 
 from orchestrator.case import ContactLaw
 from orchestrator.plan import RunPlan
+from orchestrator.post.lost import lost_bodies
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.options import RunOptions
@@ -55,6 +56,10 @@ class ThermoWatcher:
         except ValueError:
             return None
         return step * self.dt
+
+    def dropped(self) -> bool:
+        """Whether LIGGGHTS dropped atoms that left its box (fewer now than the most it had)."""
+        return self.first_atoms is not None and self.last_atoms is not None and self.last_atoms < self.first_atoms
 
 
 class LiggghtsAdapter(AdapterDefaults):
@@ -125,8 +130,12 @@ class LiggghtsAdapter(AdapterDefaults):
         env = dict(os.environ)
         if case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
             env.update(plugin.liggghts_env(plugin.ensure_plugin()))
-        tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout,
-                          log_name=log.name)
+        try:
+            tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout,
+                              log_name=log.name)
+        except EngineError as error:  # with no atom left LIGGGHTS stops (write_restart): the bodies that left are the cause
+            lost = lost_bodies(self.read_output(plan, rundir), plan.domain.lower, plan.domain.upper) if watcher.dropped() else ()
+            raise (EngineError(lost.message(), deck, log, error.tail) if len(lost) else error) from None
         # Spheres dropped from the box are NaN in the frames: the runner counts lost bodies (post.lost).
         stopped = common.at_rest_attrs(rundir, dt)
         if watcher.last_step < total and not (stopped and watcher.last_step == round(stopped["stopped_at_rest"] / dt)):
