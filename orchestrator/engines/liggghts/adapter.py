@@ -57,10 +57,6 @@ class ThermoWatcher:
             return None
         return step * self.dt
 
-    def dropped(self) -> bool:
-        """Whether LIGGGHTS dropped atoms that left its box (fewer now than the most it had)."""
-        return self.first_atoms is not None and self.last_atoms is not None and self.last_atoms < self.first_atoms
-
 
 class LiggghtsAdapter(AdapterDefaults):
     name = "liggghts"
@@ -133,13 +129,20 @@ class LiggghtsAdapter(AdapterDefaults):
         try:
             tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout,
                               log_name=log.name)
-        except EngineError as error:  # with no atom left LIGGGHTS stops (write_restart): the bodies that left are the cause
-            lost = lost_bodies(self.read_output(plan, rundir), plan.domain.lower, plan.domain.upper) if watcher.dropped() else ()
-            raise (EngineError(lost.message(), deck, log, error.tail) if len(lost) else error) from None
+        except EngineError as error:  # LIGGGHTS stops once its box is empty (write_restart): the bodies that left are the cause
+            raise self._lost_instead(plan, rundir, error) from None
         # Spheres dropped from the box are NaN in the frames: the runner counts lost bodies (post.lost).
         stopped = common.at_rest_attrs(rundir, dt)
         if watcher.last_step < total and not (stopped and watcher.last_step == round(stopped["stopped_at_rest"] / dt)):
             raise EngineError(f"the run stopped at step {watcher.last_step} of {total}", deck, log, tail)
+
+    def _lost_instead(self, plan: RunPlan, rundir: Path, error: EngineError) -> EngineError:
+        """The bodies lost by the frames written (post.lost) as the failure, when there are any; else `error`."""
+        try:
+            lost = lost_bodies(self.read_output(plan, rundir), plan.domain.lower, plan.domain.upper)
+        except (EngineError, OSError, ValueError):
+            return error
+        return EngineError(lost.message(), error.deck, error.log, error.tail) if len(lost) else error
 
     # -- output ----------------------------------------------------------------------------
     def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
