@@ -50,10 +50,10 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
         rundir = output or default_rundir(case.name, case.engine.value)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
+        writable_rundir(rundir)  # first: a read-only place (/proc, say) has no free space either
         large = check_machine(plan.output, rundir)
         if large:
             warn(large)
-        writable_rundir(rundir)
         if rundir_lock_held(rundir):
             raise rundir_module.Busy(str(rundir))
         resume = resume_point(plan, rundir)
