@@ -80,3 +80,17 @@ def test_post_on_a_result_that_lost_every_body_is_an_engine_failure(tmp_path: Pa
     write_results(tmp_path / "results.h5", trajectory(position))
     assert_one_line_error(*run_cli(["post", str(tmp_path)]), expected_code=3, field="all 2 bodies were lost by the last frame")
     assert_one_line_error(*run_cli(["post", str(tmp_path), "--json"]), expected_code=3, field="no metric can be measured")
+
+
+@pytest.mark.engine
+def test_a_clump_leaving_is_one_body_on_liggghts(tmp_path: Path) -> None:
+    """LIGGGHTS drops a clump's spheres one by one as they cross the box: the clump is lost from the
+    first frame that misses one (it was reported as so many spheres, at the last step)."""
+    data = three_leaving("liggghts")
+    data["shapes"] = [{"name": "brick", "length": 0.031, "width": 0.015, "thickness": 0.008}]
+    data["bodies"] = {"clumps": [{"shape": "brick", "material": "glass", "position": [0.0, 0.0, 0.0], "velocity": [2.0, 0.0, 0.0]}]}
+    with pytest.raises(EngineError) as caught:
+        run_case(parse_case(data), tmp_path, tmp_path / "run")
+    left = float(re.search(r"^1 body left the simulation domain \(body 0 at t = ([0-9.e-]+) s\)", caught.value.summary).group(1))
+    first_sphere_out = (HALF_WIDTH - 0.031 / 2 + 0.004) / 2.0  # the leading spheres' centres reach the box a little before the clump's
+    assert first_sphere_out - 1e-9 <= left <= HALF_WIDTH / 2.0 + INTERVAL, (left, caught.value.summary)

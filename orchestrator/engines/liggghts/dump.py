@@ -47,7 +47,7 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
     body_column, id_column = column["id_multisphere"], column["id"]
     slot_of = np.full(1, -1, dtype=np.int64)  # body id → clump slot (-1: not seen yet)
     stacked: dict[int, np.ndarray] = {}  # sphere count → (clumps, spheres, 3) templates, by slot
-    for f, rows in enumerate(frames):
+    for f, rows in ((f, rows) for f, rows in enumerate(frames) if len(rows)):  # a frame of no sphere: every clump lost (NaN)
         # `dump_modify sort id` and clumps inserted one at a time: usually sorted by body already.
         keys = rows[:, body_column]
         if not (np.all(np.diff(keys) >= 0) and np.all(np.diff(rows[:, id_column]) > 0)):
