@@ -105,26 +105,9 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     if plan.resume is None and (directory / RUN_RECORD).exists():
         rundir.retire(directory, directory.parent)  # an earlier attempt's files: kept in ../attic, never mixed with this one's
     large = check_machine(plan.output, directory)  # CaseError when it would not fit this machine
-    segments = _segments(plan, directory)
     rundir.save_inputs(directory, case)
     deck = adapter.write_input(plan, directory)
-    warnings = adapter.warnings(plan) + ((large,) if large else ())
-    record: dict[str, Any] = {
-        "orchestrator_version": __version__,
-        "kind": "case",
-        "run_id": identity,
-        "build": build,
-        "files": files,
-        "engine": build["engine"],
-        "engine_version": build["version"],
-        "deck": deck.name,
-        "status": "running",
-        "started": segments[0]["started"],
-        "segments": segments,
-        # A cut-off segment reached further than the checkpoint the next one starts from: that is lost.
-        "simulated_time_lost_s": sum(cut["reached_time_s"] - following["from_time_s"] for cut, following in zip(segments, segments[1:])),
-        **({"warnings": list(warnings)} if warnings else {}),
-    }
+    record = _running_record(plan, directory, identity, build, files, deck, adapter.warnings(plan) + ((large,) if large else ()))
     rundir.write_record(directory, record)
     started = time.perf_counter()
     try:
@@ -153,6 +136,28 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
             path.unlink()
             checkpoint.seal_path(path).unlink(missing_ok=True)
     return record
+
+
+def _running_record(plan: RunPlan, directory: Path, identity: str, build: dict[str, Any], files: dict[str, str], deck: Path,
+                    warnings: tuple[str, ...]) -> dict[str, Any]:
+    """The record of a run about to start (its segments so far, this one last)."""
+    segments = _segments(plan, directory)
+    return {
+        "orchestrator_version": __version__,
+        "kind": "case",
+        "run_id": identity,
+        "build": build,
+        "files": files,
+        "engine": build["engine"],
+        "engine_version": build["version"],
+        "deck": deck.name,
+        "status": "running",
+        "started": segments[0]["started"],
+        "segments": segments,
+        # A cut-off segment reached further than the checkpoint the next one starts from: that is lost.
+        "simulated_time_lost_s": sum(cut["reached_time_s"] - following["from_time_s"] for cut, following in zip(segments, segments[1:])),
+        **({"warnings": list(warnings)} if warnings else {}),
+    }
 
 
 def _segments(plan: RunPlan, directory: Path) -> list[dict[str, Any]]:

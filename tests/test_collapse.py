@@ -228,11 +228,14 @@ def test_campaign_over_slopes_shares_the_preparation(tmp_path: Path) -> None:
 @pytest.mark.engine
 @requires_liggghts
 def test_halving_the_time_step_keeps_the_runout(tmp_path: Path) -> None:
-    """The collapse default of 20 steps per contact against 40: the runouts agree within 2 grain
-    diameters (a granular collapse is chaotic: any change of the step reshuffles the grains, so
-    the tolerance is the front's own resolution, a few slices of one d)."""
-    runouts = []
+    """The collapse default of 20 steps per contact against 40: the mean runouts of five packings agree
+    within 2 grain diameters. A granular collapse is chaotic: any change of the step, or of round-off,
+    reshuffles the grains, and one packing's two runouts differed by up to 4 d (measured 2026-12-01,
+    seeds 1–4 and 2022: 0.026–0.040 m); the mean of five is within 1 d of either step's."""
+    means = []
     for factor in (0.05, 0.025):
-        study = parse_collapse({**TINY, "engine": "liggghts", "time_safety_factor": factor})
-        runouts.append(run_collapse(study, tmp_path / str(factor), preparations=tmp_path / "preparations")["runout"])
-    assert abs(runouts[0] - runouts[1]) <= 2 * 0.002, runouts
+        runouts = [run_collapse(parse_collapse({**TINY, "engine": "liggghts", "time_safety_factor": factor, "seed": seed}),
+                                tmp_path / f"{factor}-{seed}", preparations=tmp_path / "preparations")["runout"]
+                   for seed in (1, 2, 3, 4, 2022)]
+        means.append(sum(runouts) / len(runouts))
+    assert abs(means[0] - means[1]) <= 2 * 0.002, means
