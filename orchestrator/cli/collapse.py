@@ -56,9 +56,13 @@ def _progress() -> Progress:
 
 
 def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
-    from orchestrator.studies.collapse.plots import plot_run
+    """collapse.png (front, velocity, deposit), fields.png (u_x(z), Φ(z) at the stations) and, when
+    the interface showed waves, waves.png; returns the first."""
+    from orchestrator.studies.collapse.plots import plot_profiles, plot_run, plot_waves
 
     arrays = dict(np.load(outdir / "profiles.npz"))
+    plot_profiles(report, arrays, outdir / "fields.png")
+    plot_waves(report, arrays, outdir / "waves.png")
     return plot_run(report, arrays, outdir / "collapse.png")
 
 

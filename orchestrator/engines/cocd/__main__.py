@@ -18,18 +18,21 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.engines import checkpoint
-from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
+from orchestrator.engines.cocd.solver import Scene, Walls, disc_mass, smallest_gap, step
 
 
 def load_scene(deck: dict) -> Scene:
+    """The deck's scene; in 2D (planar) each grain becomes the disc of its radius (solver.disc_mass:
+    the deck carries sphere masses), so the frames record kg per metre of thickness."""
     bodies = np.asarray(deck["bodies"], dtype=float)
     walls = deck["walls"]
+    planar = bool(deck["planar"])
     return Scene(
         position=bodies[:, 2:5].copy(),
         velocity=bodies[:, 5:8].copy(),
         spin=bodies[:, 8:11].copy(),
         radius=bodies[:, 1].copy(),
-        mass=bodies[:, 0].copy(),
+        mass=disc_mass(bodies[:, 0], bodies[:, 1]) if planar else bodies[:, 0].copy(),
         material=bodies[:, 11].astype(int),
         fixed=bodies[:, 12].astype(bool),
         mu=np.asarray(deck["mu"], dtype=float),
@@ -42,7 +45,7 @@ def load_scene(deck: dict) -> Scene:
             active=np.ones(len(walls), bool),
         ),
         gravity=np.asarray(deck["gravity"], dtype=float),
-        planar=bool(deck["planar"]),
+        planar=planar,
     )
 
 
@@ -95,6 +98,11 @@ def load_checkpoint(scene: Scene, path: str) -> tuple[int, dict]:
 def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
+    rest = deck.get("rest")
+    if rest and scene.planar:  # the deck's moving mass M is the spheres': the same share of the discs'
+        moving = ~scene.fixed
+        sphere_mass = np.asarray(deck["bodies"], dtype=float)[moving, 0]
+        rest["mass"] *= float(scene.mass[moving].sum() / sphere_mass.sum())
     checkpoint_every = deck.get("checkpoint_every")
     dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
     removals: dict[int, list[int]] = {}

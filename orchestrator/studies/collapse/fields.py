@@ -1,0 +1,120 @@
+"""The flow's inner fields in a collapse (Martin et al. 2022, section 5): depth profiles u_x(z, t) and
+Φ(z, t) at stations along the channel, and the erosion waves of the static/flowing interface near
+the front with their Kelvin–Helmholtz criterion.
+
+The study's stations are x = 29.5, 69.5 and 119.5 cm with its column over x = 0–20 cm (R0 = 20 cm),
+i.e. 0.475, 2.475 and 4.975 R0 past the gate: the defaults, in units of R0, so they scale with the
+column. The functions are those of `post.profiles` and `post.waves`; this module picks the grains,
+the frames and the windows.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import Field
+
+from orchestrator.case import Real, Strict
+from orchestrator.post import profiles as pf
+from orchestrator.post import waves as wv
+
+G = 9.81  # m/s²: the g of the study's Kelvin–Helmholtz criterion
+
+
+class FieldsSpec(Strict):
+    """Where the depth profiles and the erosion waves are measured."""
+
+    # x / R0 past the gate: the study's three stations scaled to the column (module docstring)
+    stations: Annotated[list[Real(unit="1", ge=-1.0, le=1000.0)], Field(min_length=1, max_length=20)] = [0.475, 2.475, 4.975]
+    station_width: Real(unit="1", gt=0.0, le=100.0) = 4.0  # × d: full width of a station's window
+    layer: Real(unit="1", ge=0.1, le=10.0) = 0.5  # × d: height of a profile's layers
+    wave_window: Real(unit="1", gt=0.0, le=100.0) = 2.0  # × R0 behind the front: where the interface is traced
+
+
+def measure_fields(study: Any, position: np.ndarray, velocity: np.ndarray, radii: np.ndarray, mobile: np.ndarray, bed: np.ndarray,
+                   times: np.ndarray, front: np.ndarray) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """(report part, arrays) of the profiles and waves of one release; `study` a CollapseStudy,
+    position/velocity (frames, grains, 3), mobile (grains,) the grains that can flow, bed (grains,)
+    the erodible layer's, front (frames,). Arrays: profile_z (layers,), profile_ux and profile_phi
+    (stations, frames, layers), stations (S,), interface_x (slices,), interface (frames, slices),
+    and at the wave frame the grains of the window: wave_grains (n, 5) x, z, u_x, u_z, r and
+    wave_bed (n,) whether each began in the erodible layer."""
+    d, r0, planar = study.grains.diameter, study.column.length, study.dimension == 2
+    depth = 1.0 if planar else study.column.width
+    spec = study.fields
+    stations = np.asarray(spec.stations) * r0
+    top = float(np.nanmax(position[0, mobile, 2] + radii[mobile]))
+    edges = np.arange(0.0, top + spec.layer * d, spec.layer * d)
+    ux, phi = pf.station_profiles(position, velocity, radii, mobile, stations, spec.station_width * d, edges, planar, depth)
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    report: dict[str, Any] = {"stations": stations.tolist(), "station_width": spec.station_width * d, "layer_height": spec.layer * d,
+                              "initial_bed_level": study.bed_top + study.bed.erodible_thickness,
+                              "flowing_fraction": [], "static_fraction": []}
+    for s in range(len(stations)):
+        pairs = [pf.flowing_layer_fraction(ux[s, f], phi[s, f]) for f in range(len(times))]
+        report["flowing_fraction"].append([_plain(a) for a, _ in pairs])
+        report["static_fraction"].append([_plain(b) for _, b in pairs])
+    waves, interface, grid = measure_waves(study, position, velocity, radii, mobile, front)
+    report["waves"] = waves
+    arrays = {"profile_z": centres, "profile_ux": ux, "profile_phi": phi, "stations": stations,
+              "interface_x": grid, "interface": interface}
+    if waves["frame"] is not None:
+        f = waves["frame"]
+        x = position[f, :, 0]
+        near = mobile & (x >= np.nanmin(grid[np.isfinite(interface[f])]) - d) & (x <= front[f] + d)
+        arrays["wave_grains"] = np.column_stack([position[f, near][:, [0, 2]], velocity[f, near][:, [0, 2]], radii[near]])
+        arrays["wave_bed"] = bed[near]
+    return report, arrays
+
+
+def measure_waves(study: Any, position: np.ndarray, velocity: np.ndarray, radii: np.ndarray, mobile: np.ndarray,
+                  front: np.ndarray) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    """The interface h_sf(x, t) on slices of one d over the channel, traced in the window behind the
+    front; per frame its dominant wavelength and amplitude; the Kelvin–Helmholtz numbers at the frame
+    of the largest amplitude. Returns (report, interface (frames, slices) with NaN outside the
+    window, the slices' x)."""
+    d, r0, planar = study.grains.diameter, study.column.length, study.dimension == 2
+    grid = np.arange(0.5 * d, study.channel.length, d)
+    window = study.fields.wave_window * r0
+    interface = np.full((len(position), len(grid)), np.nan)
+    wavelength, amplitude = np.full(len(position), np.nan), np.full(len(position), np.nan)
+    for f, (frame, speed) in enumerate(zip(position, velocity)):
+        inside = (grid >= front[f] - window) & (grid <= front[f]) & (grid >= 0.0)
+        if inside.sum() < 8:
+            continue
+        keep = mobile & np.isfinite(frame).all(axis=1)
+        interface[f, inside] = wv.interface_trace(frame[keep, 0], frame[keep, 2], speed[keep, 0], radii[keep], grid[inside], d)
+        wavelength[f], amplitude[f] = wv.dominant_wave(grid[inside], interface[f, inside])
+    report: dict[str, Any] = {"window": window, "wavelength": [_plain(v) for v in wavelength], "amplitude": [_plain(v) for v in amplitude], "frame": None}
+    if np.isfinite(amplitude).any():
+        f = int(np.nanargmax(amplitude))
+        keep = mobile & np.isfinite(position[f]).all(axis=1)
+        inside = np.isfinite(interface[f])
+        layers = wv.layer_speeds_and_fractions(position[f, keep, 0], position[f, keep, 2], velocity[f, keep, 0], radii[keep],
+                                               grid[inside], interface[f, inside], study.bed_top, planar,
+                                               1.0 if planar else study.column.width)
+        threshold = wv.kelvin_helmholtz_threshold(wavelength[f], layers["phi1"], layers["phi2"], G)
+        shear = layers["u1"] - layers["u2"]
+        report.update(frame=f, wavelength_at_frame=float(wavelength[f]), amplitude_at_frame=float(amplitude[f]),
+                      median_wavelength=float(np.nanmedian(wavelength)),
+                      kelvin_helmholtz={**{k: _plain(v) for k, v in layers.items()}, "g": G, "wavelength": float(wavelength[f]),
+                                        "shear": _plain(shear), "threshold": _plain(threshold),
+                                        "unstable": bool(math.isfinite(shear) and math.isfinite(threshold) and shear >= threshold)})
+    return report, interface, grid
+
+
+def _plain(value: float) -> float | None:
+    """JSON-able: NaN → None."""
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def field_metrics(report: dict[str, Any]) -> dict[str, float]:
+    """The scalar numbers of the waves, flat, for campaign tables."""
+    waves = report.get("fields", {}).get("waves", {})
+    kh = waves.get("kelvin_helmholtz", {})
+    values = {"waves.wavelength": waves.get("wavelength_at_frame"), "waves.median_wavelength": waves.get("median_wavelength"),
+              "waves.amplitude": waves.get("amplitude_at_frame"), "waves.kh_shear": kh.get("shear"), "waves.kh_threshold": kh.get("threshold"),
+              "waves.phi1": kh.get("phi1"), "waves.phi2": kh.get("phi2")}
+    return {k: math.nan if v is None else float(v) for k, v in values.items()}
