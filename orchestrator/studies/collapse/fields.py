@@ -21,16 +21,29 @@ from orchestrator.post import profiles as pf
 from orchestrator.post import waves as wv
 
 G = 9.81  # m/s²: the g of the study's Kelvin–Helmholtz criterion
+STUDY_STATIONS = (0.475, 2.475, 4.975)  # × R0 past the gate (module docstring)
 
 
 class FieldsSpec(Strict):
     """Where the depth profiles and the erosion waves are measured."""
 
-    # x / R0 past the gate: the study's three stations scaled to the column (module docstring)
-    stations: Annotated[list[Real(unit="1", ge=-1.0, le=1000.0)], Field(min_length=1, max_length=20)] = [0.475, 2.475, 4.975]
-    station_width: Real(unit="1", gt=0.0, le=100.0) = 4.0  # × d: full width of a station's window
+    # x / R0 past the gate; None: the study's three scaled to the column (STUDY_STATIONS), those
+    # that lie in the channel
+    stations: Annotated[list[Real(unit="1", ge=-1.0, le=1000.0)], Field(min_length=1, max_length=20)] | None = None
+    # × d: full width of a station's window. Grains count by their centre, so a window of n grains
+    # wide holds its measure to about ±1/n per layer: 10 d keeps Φ(z) within ≈ 10 %.
+    station_width: Real(unit="1", gt=0.0, le=100.0) = 10.0
     layer: Real(unit="1", ge=0.1, le=10.0) = 0.5  # × d: height of a profile's layers
     wave_window: Real(unit="1", gt=0.0, le=100.0) = 2.0  # × R0 behind the front: where the interface is traced
+
+
+def station_positions(study: Any) -> np.ndarray:
+    """x (m, from the gate) of the profile stations: `fields.stations` × R0, or the study's three
+    (STUDY_STATIONS × R0) that lie in the channel."""
+    r0 = study.column.length
+    if study.fields.stations is not None:
+        return np.asarray(study.fields.stations) * r0
+    return np.array([x * r0 for x in STUDY_STATIONS if x * r0 <= study.channel.length])
 
 
 def measure_fields(study: Any, position: np.ndarray, velocity: np.ndarray, radii: np.ndarray, mobile: np.ndarray, bed: np.ndarray,
@@ -44,7 +57,7 @@ def measure_fields(study: Any, position: np.ndarray, velocity: np.ndarray, radii
     d, r0, planar = study.grains.diameter, study.column.length, study.dimension == 2
     depth = 1.0 if planar else study.column.width
     spec = study.fields
-    stations = np.asarray(spec.stations) * r0
+    stations = station_positions(study)
     top = float(np.nanmax(position[0, mobile, 2] + radii[mobile]))
     edges = np.arange(0.0, top + spec.layer * d, spec.layer * d)
     ux, phi = pf.station_profiles(position, velocity, radii, mobile, stations, spec.station_width * d, edges, planar, depth)

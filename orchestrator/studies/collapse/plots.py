@@ -80,13 +80,15 @@ def plot_slope_bed(reports: list[dict[str, Any]], directory: Path) -> list[Path]
     return written
 
 
-def plot_profiles(report: dict[str, Any], arrays: dict[str, np.ndarray], path: Path, curves: int = 12) -> Path:
+def plot_profiles(report: dict[str, Any], arrays: dict[str, np.ndarray], path: Path, curves: int = 12) -> Path | None:
     """u_x(z) (top row) and Φ(z) (bottom row) at each station, one curve per instant coloured by time
     (as the study draws them), the initial bed level dashed; at most `curves` instants per panel,
-    those when the station had grains."""
+    those when the station had grains. None when there is no station."""
     fields, time = report["fields"], np.asarray(arrays["time"])
     z, ux, phi, stations = arrays["profile_z"] * 1000, arrays["profile_ux"], arrays["profile_phi"], arrays["stations"]
     r0 = report["study"]["column"]["length"]
+    if len(stations) == 0:
+        return None  # no station in the channel
     figure, axes = subplots(2, len(stations), figsize=(3.6 * len(stations), 7), sharey=True, squeeze=False, constrained_layout=True)
     colours = colormaps["viridis"]
     for s, station in enumerate(stations):

@@ -127,7 +127,7 @@ class CollapseStudy(StudyEngineSections, Strict):
             raise ValueError(f"column: length and height must be at least two grain diameters ({2 * d} m)")
         if self.bed.glued == "random" and self.dimension == 2:
             raise ValueError("bed.glued: 'random' needs dimension 3 (a plane holds one row of grains)")
-        if max(self.fields.stations) * self.column.length > self.channel.length:
+        if self.fields.stations and max(self.fields.stations) * self.column.length > self.channel.length:
             raise ValueError(f"fields.stations: at most channel.length / column.length ({self.channel.length / self.column.length:g}) R0 past the gate")
         if 0.0 < self.bed.erodible_thickness < 0.5 * d:
             raise ValueError(f"bed.erodible_thickness: 0, or at least half a grain diameter ({0.5 * d} m)")
