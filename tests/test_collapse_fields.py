@@ -231,6 +231,7 @@ def test_the_interface_is_traced_behind_the_front(erodible: tuple) -> None:
     assert np.nanmin(interface) >= 0.0 and np.nanmax(interface) <= 0.021 + 0.004
     waves = report["fields"]["waves"]
     assert len(waves["wavelength"]) == len(waves["amplitude"]) == len(front)
+    assert isinstance(waves["wavelength_resolved"], bool)
     if waves["frame"] is not None:
         kh = waves["kelvin_helmholtz"]
         assert kh["u1"] > kh["u2"]

@@ -22,6 +22,7 @@ from orchestrator.post import waves as wv
 
 G = 9.81  # m/s²: the g of the study's Kelvin–Helmholtz criterion
 STUDY_STATIONS = (0.475, 2.475, 4.975)  # × R0 past the gate (module docstring)
+WINDOW_AGREEMENT = 0.25  # relative: λ over the whole window and over its half next to the front (window_check)
 
 
 class FieldsSpec(Strict):
@@ -100,7 +101,8 @@ def measure_waves(study: Any, position: np.ndarray, velocity: np.ndarray, radii:
         keep = mobile & np.isfinite(frame).all(axis=1)
         interface[f, inside] = wv.interface_trace(frame[keep, 0], frame[keep, 2], speed[keep, 0], radii[keep], grid[inside], d)
         wavelength[f], amplitude[f] = wv.dominant_wave(grid[inside], interface[f, inside])
-    report: dict[str, Any] = {"window": window, "wavelength": [_plain(v) for v in wavelength], "amplitude": [_plain(v) for v in amplitude], "frame": None}
+    report: dict[str, Any] = {"window": window, "wavelength": [_plain(v) for v in wavelength], "amplitude": [_plain(v) for v in amplitude],
+                              "frame": None, **window_check(grid, interface, front, window, wavelength)}
     if np.isfinite(amplitude).any():
         f = int(np.nanargmax(amplitude))
         keep = mobile & np.isfinite(position[f]).all(axis=1)
@@ -111,11 +113,25 @@ def measure_waves(study: Any, position: np.ndarray, velocity: np.ndarray, radii:
         threshold = wv.kelvin_helmholtz_threshold(wavelength[f], layers["phi1"], layers["phi2"], G)
         shear = layers["u1"] - layers["u2"]
         report.update(frame=f, wavelength_at_frame=float(wavelength[f]), amplitude_at_frame=float(amplitude[f]),
-                      median_wavelength=float(np.nanmedian(wavelength)),
                       kelvin_helmholtz={**{k: _plain(v) for k, v in layers.items()}, "g": G, "wavelength": float(wavelength[f]),
                                         "shear": _plain(shear), "threshold": _plain(threshold),
                                         "unstable": bool(math.isfinite(shear) and math.isfinite(threshold) and shear >= threshold)})
     return report, interface, grid
+
+
+def window_check(grid: np.ndarray, interface: np.ndarray, front: np.ndarray, window: float, wavelength: np.ndarray) -> dict[str, Any]:
+    """Whether the waves have a wavelength of their own: the median λ over the frames, measured again
+    on the half of the window next to the front, must agree within WINDOW_AGREEMENT. A trace without
+    a characteristic length (noise, whose spectrum rises towards long waves) gives a λ that follows
+    the window instead."""
+    half = np.full(len(interface), np.nan)
+    for f, row in enumerate(interface):
+        near = np.isfinite(row) & (grid >= front[f] - window / 2)
+        if near.sum() >= 8:
+            half[f] = wv.dominant_wave(grid[near], row[near])[0]
+    full, short = (float(np.nanmedian(v)) if np.isfinite(v).any() else math.nan for v in (wavelength, half))
+    agree = math.isfinite(full) and math.isfinite(short) and abs(full - short) <= WINDOW_AGREEMENT * full
+    return {"median_wavelength": _plain(full), "median_wavelength_half_window": _plain(short), "wavelength_resolved": bool(agree)}
 
 
 def _plain(value: float) -> float | None:

@@ -51,7 +51,8 @@ def run_entry(report: dict[str, Any], study_dir: Path) -> dict[str, Any]:
                    "simulated_s": float(time[-1])},
         "runout_over_R0": report["runout_over_R0"], "runout_at_study_times": at, "reached_end": front["reached_end"],
         "front": {k: front[k] for k in ("v_max", "t_max", "x_max", "slow_phase", "t_slow", "x_slow", "v_slow", "at_rest", "t_stop")},
-        "waves": {k: waves.get(k) for k in ("wavelength_at_frame", "amplitude_at_frame", "median_wavelength")}
+        "waves": {k: waves.get(k) for k in ("wavelength_at_frame", "amplitude_at_frame", "median_wavelength",
+                                              "median_wavelength_half_window", "wavelength_resolved")}
                  | {"time": float(time[waves["frame"]]) if waves.get("frame") is not None else None,
                     "kelvin_helmholtz": waves.get("kelvin_helmholtz")},
     }
@@ -109,7 +110,7 @@ def render_section(record: dict[str, Any]) -> list[str]:
              f"scaled to R0 × H0 = {100 * r0:g} × {100 * h0:g} cm with d = {1000 * d:g} mm (the study: 20 × 14 cm, d ≈ 1 mm). "
              f"Times and speeds scale by √(R0/20 cm) = {scale:.3f}: the study's t = 1 s is {scale:.3f} s here.", "",
              "| h_i (mm) | grains (column + bed) | cost (min: rain + release) | r_f/R0 at the study's " + ", ".join(f"{t:g}" for t in STUDY_TIMES)
-             + " s | final r_f/R0 | v_max (m/s) | slow phase (m/s) | λ (cm) | A (mm) | u1 − u2 (m/s) | KH threshold (m/s) |",
+             + " s | final r_f/R0 | v_max (m/s) | slow phase (m/s) | λ (cm): window / half | A (mm) | u1 − u2 (m/s) | KH threshold (m/s) |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for run in runs:
         grains, cost, front, waves = run["grains"], run["cost_s"], run["front"], run["waves"]
@@ -119,7 +120,8 @@ def render_section(record: dict[str, Any]) -> list[str]:
         slow = _num(front["v_slow"], digits=3) if front["slow_phase"] else "none"
         lines.append(f"| {1000 * run['erodible_thickness']:g} | {grains['column']} + {grains['bed']} | {minutes:.1f} | {at} | "
                      f"{run['runout_over_R0']:.2f}{' (end wall)' if run['reached_end'] else ''} | {front['v_max']:.2f} | {slow} | "
-                     f"{_num(waves['median_wavelength'], 100, 1)} | {_num(waves['amplitude_at_frame'], 1000, 1)} | "
+                     f"{_num(waves['median_wavelength'], 100, 1)} / {_num(waves['median_wavelength_half_window'], 100, 1)}"
+                     f"{'' if waves['wavelength_resolved'] else ' (follows the window)'} | {_num(waves['amplitude_at_frame'], 1000, 1)} | "
                      f"{_num(kh.get('shear'), digits=3)} | {_num(kh.get('threshold'), digits=3)} |")
     lines += [""] + _comparisons(record) + [""]
     return lines
@@ -139,6 +141,8 @@ def _comparisons(record: dict[str, Any]) -> list[str]:
         lines.append(f"Slow phase at h_i = 10 mm: {_num(slow['front']['v_slow'], digits=3)} m/s against the study's "
                      f"{STUDY_SLOW_SPEED:g} m/s × {scale:.3f} = {STUDY_SLOW_SPEED * scale:.3f} m/s at this scale.")
     lines.append(f"Erosion waves: the study's λ ≈ {100 * STUDY_WAVELENGTH[0]:g} cm (experiments) and {100 * STUDY_WAVELENGTH[1]:g} cm "
-                 f"(simulations), KH threshold ≈ {STUDY_KH[0]:g} and {STUDY_KH[1]:g} m/s; λ here is the median over the frames "
-                 "with a wave in the window behind the front, the KH numbers at the frame of the largest amplitude.")
+                 f"(simulations), KH threshold ≈ {STUDY_KH[0]:g} and {STUDY_KH[1]:g} m/s. λ here is the median over the frames "
+                 "of the interface's dominant wavelength in the window behind the front, and again in the half of the window next "
+                 "to the front: when the two differ by more than a quarter, λ follows the window (the trace has no length of its "
+                 "own) and is not a wave's. A: the amplitude and KH: the criterion at the frame of the largest amplitude.")
     return lines
