@@ -13,6 +13,7 @@ from orchestrator.case import CaseError
 from orchestrator.post import profiles as pf
 from orchestrator.post import waves as wv
 from orchestrator.results import read_results
+from orchestrator.studies.collapse.record import render_section, row_record, runout_order
 from orchestrator.studies.collapse.spec import parse_collapse
 from orchestrator.studies.collapse.study import run_collapse
 
@@ -237,3 +238,42 @@ def test_the_interface_is_traced_behind_the_front(erodible: tuple) -> None:
         assert kh["u1"] > kh["u2"]
         assert 0.0 < kh["phi1"] <= 1.0 and 0.0 < kh["phi2"] <= 1.0
         assert arrays["wave_grains"].shape[1] == 5
+
+
+@pytest.mark.engine
+def test_a_row_record_reads_the_finished_run(erodible: tuple) -> None:
+    """`demorch collapse record`'s reader: the run's runout, grains and engine wall time, and the
+    runout at the study's times (t √(R0/20 cm) here) read off the front curve."""
+    report, _, directory = erodible
+    record = row_record([directory])
+    run = record["runs"][0]
+    assert record["time_scale"] == pytest.approx(math.sqrt(0.03 / 0.20))
+    assert run["runout_over_R0"] == report["runout_over_R0"] and run["grains"] == report["grains"]
+    assert run["cost_s"]["release"] > 0.0 and run["cost_s"]["preparation"] > 0.0
+    front = report["front"]
+    t = 0.5 * record["time_scale"]
+    assert run["runout_at_study_times"]["0.5"] == pytest.approx(np.interp(t, front["time"], front["position"]) / 0.03)
+    assert run["runout_at_study_times"]["2"] is None  # 2 s of the study's clock is 0.77 s here, past the 0.4 s run
+
+
+def row(thickness: float, runout: float) -> dict:
+    return {"erodible_thickness": thickness, "runout_over_R0": runout, "reached_end": False,
+            "grains": {"column": 100, "bed": 50}, "cost_s": {"preparation": 60.0, "release": 120.0},
+            "runout_at_study_times": {"0.5": 1.0, "1": None},
+            "front": {"v_max": 0.5, "slow_phase": True, "v_slow": 0.1},
+            "waves": {"median_wavelength": 0.04, "median_wavelength_half_window": 0.02, "wavelength_resolved": False,
+                      "amplitude_at_frame": 0.0015, "kelvin_helmholtz": {"shear": 0.2, "threshold": 0.1}}}
+
+
+def test_the_row_section_states_the_order_and_the_gap() -> None:
+    """The validation page's section: the order of the final runouts, the 3 → 5 mm gap against the
+    study's 1.10 R0 at 22°, and the slow phase at 10 mm against 20 cm/s scaled by √(R0/20 cm)."""
+    record = {"recorded": "2026-12-01", "engine": "cocd", "dimension": 2, "slope_deg": 22.0, "step": 0.001,
+              "column": {"length": 0.05, "height": 0.035}, "grains": {"diameter": 0.001}, "contacts": {"mu": 0.9},
+              "time_scale": 0.5, "runs": [row(0.0, 4.0), row(0.003, 3.5), row(0.005, 4.5), row(0.010, 5.0)]}
+    assert runout_order(record) == "3 < 0 < 5 < 10 mm"
+    text = "\n".join(render_section(record))
+    assert "Gap r_f(5 mm) − r_f(3 mm): +1.00 R0 (the study at 22°: +1.10 R0)" in text
+    assert "0.100 m/s against the study's 0.2 m/s × 0.500 = 0.100 m/s" in text
+    assert "4.0 / 2.0 (follows the window)" in text
+    assert "| 3.0 |" in text  # minutes: one of rain, two of release
