@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orchestrator.engines.cocd.__main__ import load_scene, rest_of_discs
 from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
 from orchestrator.studies.collapse.spec import parse_collapse
 from orchestrator.studies.collapse.study import run_collapse
@@ -164,3 +165,18 @@ def test_a_static_pile_kept_200_steps_stays_at_rest(tmp_path: Path) -> None:
     assert rest.time[-1] == pytest.approx(0.2)  # 200 steps of the default 1 ms
     assert np.linalg.norm(rest.velocity, axis=2).max() < 1e-5
     assert np.abs(rest.position[-1] - rest.position[0]).max() < 1e-6
+
+
+def test_a_2d_deck_loads_its_grains_as_discs_and_rescales_the_rest_mass() -> None:
+    """A planar deck carries sphere masses (4/3 ρ π r³); the runner weighs each grain as the disc of
+    its radius, ρ π r² per metre of thickness, and the rest criterion's moving mass M with it (the
+    glued grain left out), so the RMS speed it compares stays a speed."""
+    radii = np.array([0.001, 0.002, 0.001])
+    spheres = 2500.0 * 4 / 3 * math.pi * radii**3
+    bodies = [[m, r, 0.0, 0.0, 0.01 * k, 0, 0, 0, 0, 0, 0, 0, 1.0 if k == 2 else 0.0] for k, (m, r) in enumerate(zip(spheres, radii))]
+    deck = {"bodies": bodies, "walls": [], "mu": [[0.5]], "gravity": [0, 0, -G], "planar": True}
+    scene = load_scene(deck)
+    assert np.allclose(scene.mass, 2500.0 * math.pi * radii**2, rtol=1e-12)
+    rest = rest_of_discs({"mass": float(spheres[:2].sum()), "speed": 0.01}, scene, deck)
+    assert rest["mass"] == pytest.approx(2500.0 * math.pi * (radii[:2] ** 2).sum(), rel=1e-12)
+    assert load_scene({**deck, "planar": False}).mass.tolist() == spheres.tolist()

@@ -49,6 +49,16 @@ def load_scene(deck: dict) -> Scene:
     )
 
 
+def rest_of_discs(rest: dict | None, scene: Scene, deck: dict) -> dict | None:
+    """The deck's rest settings with the moving mass M of the scene's grains: the deck gives the
+    spheres' (the orchestrator's masses), a 2D scene weighs discs (load_scene)."""
+    if not rest or not scene.planar:
+        return rest
+    moving = ~scene.fixed
+    spheres = float(np.asarray(deck["bodies"], dtype=float)[moving, 0].sum())
+    return {**rest, "mass": rest["mass"] * float(scene.mass[moving].sum()) / spheres}
+
+
 def write_frame(stream, scene: Scene, now: float) -> None:
     rows = np.full((len(scene.mass), 16), np.nan)
     rows[:, 0] = np.arange(1, len(scene.mass) + 1)
@@ -98,11 +108,7 @@ def load_checkpoint(scene: Scene, path: str) -> tuple[int, dict]:
 def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
-    rest = deck.get("rest")
-    if rest and scene.planar:  # the deck's moving mass M is the spheres': the same share of the discs'
-        moving = ~scene.fixed
-        sphere_mass = np.asarray(deck["bodies"], dtype=float)[moving, 0]
-        rest["mass"] *= float(scene.mass[moving].sum() / sphere_mass.sum())
+    deck["rest"] = rest_of_discs(deck.get("rest"), scene, deck)
     checkpoint_every = deck.get("checkpoint_every")
     dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
     removals: dict[int, list[int]] = {}
