@@ -205,6 +205,9 @@ def test_profiles_at_the_stations(erodible: tuple) -> None:
     fields = report["fields"]
     z, ux, phi = arrays["profile_z"], arrays["profile_ux"], arrays["profile_phi"]
     assert ux.shape == phi.shape == (3, len(arrays["time"]), len(z))
+    shown = len(fields["z"])  # report.json: the same profiles up to the highest layer reached
+    assert 0 < shown <= len(z) and np.asarray(fields["phi"]).shape == (3, len(arrays["time"]), shown)
+    assert np.allclose(np.asarray(fields["phi"], dtype=float), phi[:, :, :shown], atol=1e-4)
     assert np.allclose(arrays["stations"], [0.009, 0.03, 0.06])
     assert fields["initial_bed_level"] == pytest.approx(0.006)
     inside = (z > 0.002 + 0.001) & (z < 0.006 - 0.001)  # the erodible layer, a grain radius from its edges

@@ -50,6 +50,8 @@ def station_positions(study: Any) -> np.ndarray:
 def measure_fields(study: Any, position: np.ndarray, velocity: np.ndarray, radii: np.ndarray, mobile: np.ndarray, bed: np.ndarray,
                    times: np.ndarray, front: np.ndarray) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """(report part, arrays) of the profiles and waves of one release; `study` a CollapseStudy,
+    report: the stations, u_x(z, t) as `ux` and Φ(z, t) as `phi` ((stations, frames, layers) lists,
+    m/s and 1, up to the highest layer reached; heights `z` in m), flowing/static Φ, the waves;
     position/velocity (frames, grains, 3), mobile (grains,) the grains that can flow, bed (grains,)
     the erodible layer's, front (frames,). Arrays: profile_z (layers,), profile_ux and profile_phi
     (stations, frames, layers), stations (S,), interface_x (slices,), interface (frames, slices),
@@ -63,8 +65,11 @@ def measure_fields(study: Any, position: np.ndarray, velocity: np.ndarray, radii
     edges = np.arange(0.0, top + spec.layer * d, spec.layer * d)
     ux, phi = pf.station_profiles(position, velocity, radii, mobile, stations, spec.station_width * d, edges, planar, depth)
     centres = 0.5 * (edges[1:] + edges[:-1])
+    filled = np.flatnonzero(phi.max(axis=(0, 1)) > 0) if phi.size else np.zeros(0, int)  # layers some grain ever reached
+    shown = slice(0, int(filled[-1]) + 1 if filled.size else 0)
     report: dict[str, Any] = {"stations": stations.tolist(), "station_width": spec.station_width * d, "layer_height": spec.layer * d,
                               "initial_bed_level": study.bed_top + study.bed.erodible_thickness,
+                              "z": centres[shown].round(6).tolist(), "ux": _rounded(ux[:, :, shown], 5), "phi": _rounded(phi[:, :, shown], 4),
                               "flowing_fraction": [], "static_fraction": []}
     for s in range(len(stations)):
         pairs = [pf.flowing_layer_fraction(ux[s, f], phi[s, f]) for f in range(len(times))]
@@ -132,6 +137,11 @@ def window_check(grid: np.ndarray, interface: np.ndarray, front: np.ndarray, win
     full, short = (float(np.nanmedian(v)) if np.isfinite(v).any() else math.nan for v in (wavelength, half))
     agree = math.isfinite(full) and math.isfinite(short) and abs(full - short) <= WINDOW_AGREEMENT * full
     return {"median_wavelength": _plain(full), "median_wavelength_half_window": _plain(short), "wavelength_resolved": bool(agree)}
+
+
+def _rounded(values: np.ndarray, digits: int) -> list:
+    """Nested lists of `values` rounded to `digits` decimals, NaN → None (JSON)."""
+    return np.where(np.isfinite(values), values.round(digits), None).tolist()
 
 
 def _plain(value: float) -> float | None:

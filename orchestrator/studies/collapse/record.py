@@ -25,6 +25,8 @@ STUDY_GAP_3_5 = {16.0: 0.10, 19.0: 0.30, 22.0: 1.10}  # (r_f(5 mm) − r_f(3 mm)
 STUDY_SLOW_SPEED = 0.20  # m/s: slow-phase front speed at α = 22°, h_i = 10 mm
 STUDY_WAVELENGTH = (0.07, 0.08)  # m: erosion waves in the experiments, in the simulations
 STUDY_KH = (0.40, 0.24)  # m/s: the criterion's threshold, experiments and simulations
+END_SPAN = 0.3  # s: the last part of a record over which the front's mean speed says whether it still moves
+MOVING = 0.02  # m/s: a front faster than this at the end of the record still moves (post.collapse.REST_SPEED)
 
 
 def _wall(directory: Path) -> float:
@@ -50,12 +52,19 @@ def run_entry(report: dict[str, Any], study_dir: Path) -> dict[str, Any]:
         "cost_s": {"release": _wall(study_dir / "run"), "preparation": _wall(preparation) if preparation.name else math.nan,
                    "simulated_s": float(time[-1])},
         "runout_over_R0": report["runout_over_R0"], "runout_at_study_times": at, "reached_end": front["reached_end"],
+        "end_speed": end_speed(time, position),
         "front": {k: front[k] for k in ("v_max", "t_max", "x_max", "slow_phase", "t_slow", "x_slow", "v_slow", "at_rest", "t_stop")},
         "waves": {k: waves.get(k) for k in ("wavelength_at_frame", "amplitude_at_frame", "median_wavelength",
                                               "median_wavelength_half_window", "wavelength_resolved")}
                  | {"time": float(time[waves["frame"]]) if waves.get("frame") is not None else None,
                     "kelvin_helmholtz": waves.get("kelvin_helmholtz")},
     }
+
+
+def end_speed(time: np.ndarray, position: np.ndarray, span: float = END_SPAN) -> float:
+    """Mean front speed (m/s) over the last `span` seconds of the record: whether the runout is final."""
+    start = max(float(time[0]), float(time[-1]) - span)
+    return float((position[-1] - np.interp(start, time, position)) / (time[-1] - start)) if time[-1] > start else 0.0
 
 
 def row_record(study_dirs: list[Path]) -> dict[str, Any]:
@@ -110,7 +119,7 @@ def render_section(record: dict[str, Any]) -> list[str]:
              f"scaled to R0 × H0 = {100 * r0:g} × {100 * h0:g} cm with d = {1000 * d:g} mm (the study: 20 × 14 cm, d ≈ 1 mm). "
              f"Times and speeds scale by √(R0/20 cm) = {scale:.3f}: the study's t = 1 s is {scale:.3f} s here.", "",
              "| h_i (mm) | grains (column + bed) | cost (min: rain + release) | r_f/R0 at the study's " + ", ".join(f"{t:g}" for t in STUDY_TIMES)
-             + " s | final r_f/R0 | v_max (m/s) | slow phase (m/s) | λ (cm): window / half | A (mm) | u1 − u2 (m/s) | KH threshold (m/s) |",
+             + " s | r_f/R0 at the end | v_max (m/s) | slow phase (m/s) | λ (cm): window / half | A (mm) | u1 − u2 (m/s) | KH threshold (m/s) |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for run in runs:
         grains, cost, front, waves = run["grains"], run["cost_s"], run["front"], run["waves"]
@@ -119,7 +128,7 @@ def render_section(record: dict[str, Any]) -> list[str]:
         at = " / ".join(_num(v) for v in run["runout_at_study_times"].values())
         slow = _num(front["v_slow"], digits=3) if front["slow_phase"] else "none"
         lines.append(f"| {1000 * run['erodible_thickness']:g} | {grains['column']} + {grains['bed']} | {minutes:.1f} | {at} | "
-                     f"{run['runout_over_R0']:.2f}{' (end wall)' if run['reached_end'] else ''} | {front['v_max']:.2f} | {slow} | "
+                     f"{run['runout_over_R0']:.2f}{' (end wall)' if run['reached_end'] else ''}{_moving(run)} | {front['v_max']:.2f} | {slow} | "
                      f"{_num(waves['median_wavelength'], 100, 1)} / {_num(waves['median_wavelength_half_window'], 100, 1)}"
                      f"{'' if waves['wavelength_resolved'] else ' (follows the window)'} | {_num(waves['amplitude_at_frame'], 1000, 1)} | "
                      f"{_num(kh.get('shear'), digits=3)} | {_num(kh.get('threshold'), digits=3)} |")
@@ -127,11 +136,18 @@ def render_section(record: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _moving(run: dict[str, Any]) -> str:
+    speed = run.get("end_speed")
+    return f" (moving, {speed:.2f} m/s)" if speed is not None and speed > MOVING else ""
+
+
 def _comparisons(record: dict[str, Any]) -> list[str]:
     """Sentences setting the row against the study's numbers."""
     by_bed = {round(1000 * run["erodible_thickness"]): run for run in record["runs"]}
     scale = record["time_scale"]
-    lines = [f"Final runouts, shortest to longest: h_i = {runout_order(record)} (the study: the runout grows with h_i)."]
+    moving = [f"{1000 * run['erodible_thickness']:g}" for run in record["runs"] if _moving(run)]
+    lines = [f"Runouts at the end of the record, shortest to longest: h_i = {runout_order(record)} (the study: the runout grows "
+             f"with h_i)" + (f"; still moving at the end: h_i = {', '.join(moving)} mm, so those runouts are lower bounds." if moving else ".")]
     if 3 in by_bed and 5 in by_bed:
         gap = by_bed[5]["runout_over_R0"] - by_bed[3]["runout_over_R0"]
         lines.append(f"Gap r_f(5 mm) − r_f(3 mm): {gap:+.2f} R0 (the study at {record['slope_deg']:g}°: "
