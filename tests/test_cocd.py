@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orchestrator.engines.cocd.__main__ import load_scene, rest_of_discs
 from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
 from orchestrator.studies.collapse.spec import parse_collapse
 from orchestrator.studies.collapse.study import run_collapse
@@ -50,14 +51,16 @@ def test_an_impact_is_perfectly_inelastic_and_does_not_penetrate() -> None:
     assert scene.position[0, 2] >= 0.01 - 1e-9
 
 
-@pytest.mark.parametrize("planar", [False, True])
-def test_a_sliding_sphere_rolls_without_slipping_after_friction_acts(planar: bool) -> None:
-    """A sphere launched sliding at 1 m/s without spin: friction μ g decelerates it and spins it up
-    until v = r ω, which for a solid sphere happens at v = 5/7 of the launch speed (any μ > 0)."""
+@pytest.mark.parametrize("planar, rolling", [(False, 5 / 7), (True, 2 / 3)], ids=["sphere", "disc"])
+def test_a_sliding_grain_rolls_without_slipping_after_friction_acts(planar: bool, rolling: float) -> None:
+    """A grain launched sliding at 1 m/s without spin: friction μ g decelerates it and spins it up
+    until v = r ω, at v = v0 / (1 + I/(m r²)) whatever μ > 0: 5/7 for a solid sphere (3D), 2/3 for
+    the disc a 2D grain is (I = ½ m r²). Tolerance 0.2 %: the 1 ms step ends the sliding phase up to
+    one step late (μ g Δt = 3 mm/s)."""
     scene = floor_scene([[0, 0, 0.01]], [[1.0, 0, 0]], 0.3, planar=planar)
     for _ in range(200):
         step(scene, 1e-3)
-    assert scene.velocity[0, 0] == pytest.approx(5 / 7, rel=2e-3)
+    assert scene.velocity[0, 0] == pytest.approx(rolling, rel=2e-3)
     assert scene.spin[0, 1] * 0.01 == pytest.approx(scene.velocity[0, 0], rel=2e-3)  # rolling: v = r ω_y
 
 
@@ -126,9 +129,10 @@ def test_no_interpenetration_over_a_collapse(collapses: dict) -> None:
 
 @pytest.mark.engine
 def test_friction_changes_the_runout(collapses: dict) -> None:
-    """Frictionless grains spread further than μ = 0.3 ones (measured: 0.102 against 0.072 m after
-    0.4 s; the rough bed of glued grains holds even frictionless grains by interlocking). The 25 %
-    margin is about 4 slices of one d, the front's resolution being one slice."""
+    """Frictionless grains spread further than μ = 0.3 ones (measured with disc grains, 2026-12-01:
+    0.094 against 0.072 m after 0.4 s; the rough bed of glued grains holds even frictionless grains
+    by interlocking). The 25 % margin (0.090 m) is about 4 slices of one d, the front's resolution
+    being one slice."""
     with_friction, without = collapses[0.3][0]["runout"], collapses[0.0][0]["runout"]
     assert without > 1.25 * with_friction, (with_friction, without)
 
@@ -162,3 +166,18 @@ def test_a_static_pile_kept_200_steps_stays_at_rest(tmp_path: Path) -> None:
     assert rest.time[-1] == pytest.approx(0.2)  # 200 steps of the default 1 ms
     assert np.linalg.norm(rest.velocity, axis=2).max() < 1e-5
     assert np.abs(rest.position[-1] - rest.position[0]).max() < 1e-6
+
+
+def test_a_2d_deck_loads_its_grains_as_discs_and_rescales_the_rest_mass() -> None:
+    """A planar deck carries sphere masses (4/3 ρ π r³); the runner weighs each grain as the disc of
+    its radius, ρ π r² per metre of thickness, and the rest criterion's moving mass M with it (the
+    glued grain left out), so the RMS speed it compares stays a speed."""
+    radii = np.array([0.001, 0.002, 0.001])
+    spheres = 2500.0 * 4 / 3 * math.pi * radii**3
+    bodies = [[m, r, 0.0, 0.0, 0.01 * k, 0, 0, 0, 0, 0, 0, 0, 1.0 if k == 2 else 0.0] for k, (m, r) in enumerate(zip(spheres, radii))]
+    deck = {"bodies": bodies, "walls": [], "mu": [[0.5]], "gravity": [0, 0, -G], "planar": True}
+    scene = load_scene(deck)
+    assert np.allclose(scene.mass, 2500.0 * math.pi * radii**2, rtol=1e-12)
+    rest = rest_of_discs({"mass": float(spheres[:2].sum()), "speed": 0.01}, scene, deck)
+    assert rest["mass"] == pytest.approx(2500.0 * math.pi * (radii[:2] ** 2).sum(), rel=1e-12)
+    assert load_scene({**deck, "planar": False}).mass.tolist() == spheres.tolist()

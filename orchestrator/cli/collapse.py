@@ -56,9 +56,13 @@ def _progress() -> Progress:
 
 
 def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
-    from orchestrator.studies.collapse.plots import plot_run
+    """collapse.png (front, velocity, deposit), fields.png (u_x(z), Φ(z) at the stations) and, when
+    the interface showed waves, waves.png; returns the first."""
+    from orchestrator.studies.collapse.plots import plot_profiles, plot_run, plot_waves
 
     arrays = dict(np.load(outdir / "profiles.npz"))
+    plot_profiles(report, arrays, outdir / "fields.png")
+    plot_waves(report, arrays, outdir / "waves.png")
     return plot_run(report, arrays, outdir / "collapse.png")
 
 
@@ -140,3 +144,23 @@ def plot_command(campaign_dir: Path, output: Path | None) -> None:
     target.mkdir(parents=True, exist_ok=True)
     for path in plot_slope_bed(reports, target):
         console.print(f"figure: {path}")
+
+
+@collapse.command("record")
+@click.argument("study_dirs", nargs=-1, required=True, type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--output", "-o", type=click.Path(dir_okay=False, path_type=Path), required=True, help="The record (JSON).")
+def record_command(study_dirs: tuple[Path, ...], output: Path) -> None:
+    """Record a row of finished collapses (one slope; e.g. a campaign's runs/*) against the erodible-bed
+    study: set-up, cost per run, runouts at the study's times, front phases, waves, Kelvin–Helmholtz."""
+    from orchestrator.studies.collapse.record import row_record
+
+    missing = [str(d) for d in study_dirs if not (d / "report.json").is_file()]
+    if missing:
+        fail(f"study_dirs: no report.json in {', '.join(missing)}")
+    try:
+        record = row_record(list(study_dirs))
+    except ValueError as error:
+        fail(str(error))
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(json.dumps(record, indent=1) + "\n")
+    console.print(f"record: {output}")

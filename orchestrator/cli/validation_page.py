@@ -47,6 +47,8 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
                                            demo=demo, progress=lambda stage: console.print(stage))
         except EngineError as error:
             fail(str(error), code=EXIT_ENGINE)
+        if record_path.is_file():  # the collapse row is recorded apart (demorch collapse record): keep its link
+            record["collapse"] = json.loads(record_path.read_text()).get("collapse")
         record_path.parent.mkdir(parents=True, exist_ok=True)
         record_path.write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         console.print(f"record: {record_path}")

@@ -7,7 +7,9 @@ engine versions, and per engine
   metrics and the curves the figure draws;
 - optionally the demo avalanche (cases/avalanche/small.yaml) over several seeds: its deposit
   metrics (reference: the demo run six times with the study's own code,
-  data/validation_reference.toml).
+  data/validation_reference.toml);
+- optionally `collapse`: the path of a collapse row's record (`demorch collapse record`, e.g.
+  docs/collapse/disc2d22.json), rendered by studies.collapse.record.render_section.
 
 `render_page` turns a record into the Markdown page and its figures: tables with the tolerance
 and a verdict per engine. The committed docs/validation.md is render_page(docs/validation/record.json);
@@ -17,6 +19,7 @@ a test keeps them equal, so every number on the page comes from a recorded run.
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import tomllib
 from dataclasses import dataclass
@@ -27,8 +30,10 @@ import numpy as np
 
 from orchestrator.figures import subplots
 from orchestrator.studies import brick_drop
+from orchestrator.studies.collapse.record import render_section
 
 VALIDATION_REFERENCE = Path(__file__).resolve().parents[1] / "data" / "validation_reference.toml"
+REPO_ROOT = Path(__file__).resolve().parents[2]
 CURVE_EVERY = 10  # frames of a drop (1e-4 s apart) per recorded curve point: 1 ms
 DROPS = (("flat", "A"), ("flat", "B"), ("tilted", "A"), ("tilted", "B"))
 DEMO_SEEDS = (2009, 2010, 2011)
@@ -183,6 +188,8 @@ def render_page(record: dict[str, Any], figures: Path, figures_link: str = "vali
               "landing (dotted).", ""]
     if record.get("demo"):
         lines += _demo_section(record, figures, figures_link)
+    if record.get("collapse"):  # the path (from the repository's root) of a collapse row's record
+        lines += render_section(json.loads((REPO_ROOT / record["collapse"]).read_text()))
     return "\n".join(lines).rstrip() + "\n"
 
 

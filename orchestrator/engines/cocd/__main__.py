@@ -18,18 +18,21 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.engines import checkpoint
-from orchestrator.engines.cocd.solver import Scene, Walls, smallest_gap, step
+from orchestrator.engines.cocd.solver import Scene, Walls, disc_mass, smallest_gap, step
 
 
 def load_scene(deck: dict) -> Scene:
+    """The deck's scene; in 2D (planar) each grain becomes the disc of its radius (solver.disc_mass:
+    the deck carries sphere masses), so the frames record kg per metre of thickness."""
     bodies = np.asarray(deck["bodies"], dtype=float)
     walls = deck["walls"]
+    planar = bool(deck["planar"])
     return Scene(
         position=bodies[:, 2:5].copy(),
         velocity=bodies[:, 5:8].copy(),
         spin=bodies[:, 8:11].copy(),
         radius=bodies[:, 1].copy(),
-        mass=bodies[:, 0].copy(),
+        mass=disc_mass(bodies[:, 0], bodies[:, 1]) if planar else bodies[:, 0].copy(),
         material=bodies[:, 11].astype(int),
         fixed=bodies[:, 12].astype(bool),
         mu=np.asarray(deck["mu"], dtype=float),
@@ -42,8 +45,18 @@ def load_scene(deck: dict) -> Scene:
             active=np.ones(len(walls), bool),
         ),
         gravity=np.asarray(deck["gravity"], dtype=float),
-        planar=bool(deck["planar"]),
+        planar=planar,
     )
+
+
+def rest_of_discs(rest: dict | None, scene: Scene, deck: dict) -> dict | None:
+    """The deck's rest settings with the moving mass M of the scene's grains: the deck gives the
+    spheres' (the orchestrator's masses), a 2D scene weighs discs (load_scene)."""
+    if not rest or not scene.planar:
+        return rest
+    moving = ~scene.fixed
+    spheres = float(np.asarray(deck["bodies"], dtype=float)[moving, 0].sum())
+    return {**rest, "mass": rest["mass"] * float(scene.mass[moving].sum()) / spheres}
 
 
 def write_frame(stream, scene: Scene, now: float) -> None:
@@ -95,6 +108,7 @@ def load_checkpoint(scene: Scene, path: str) -> tuple[int, dict]:
 def main(deck_path: str) -> None:
     deck = json.loads(Path(deck_path).read_text())
     scene = load_scene(deck)
+    deck["rest"] = rest_of_discs(deck.get("rest"), scene, deck)
     checkpoint_every = deck.get("checkpoint_every")
     dt, total, every = deck["dt"], deck["total_steps"], deck["output_every"]
     removals: dict[int, list[int]] = {}

@@ -14,6 +14,10 @@ so grains do not interpenetrate beyond the solver's tolerance. Contacts are perf
 sliding contact dilates by μ |u_t| Δt (the convexification's known artefact). There is no rolling
 resistance: rolling grains do not stop by themselves.
 
+In 2D (`planar`) the grains are discs, as in the study's 2D simulations: mass ρ π r² per metre of
+thickness (`disc_mass`, applied when a deck is loaded) and inertia ½ m r²; a sphere kept in a plane
+would roll with ⅖ m r² and weigh ∝ r³.
+
 Masses are divided by their mean and the cone by Δt is already in velocity units, so the program is
 well scaled whatever the grain size. Solvers (called directly with scipy.sparse matrices): Clarabel
 (interior point, the reference), SCS (first order, for large 3D problems), PIQP (2D only: a QP).
@@ -198,11 +202,24 @@ def _linear_rows(layout: Layout, contacts: Contacts, direction: np.ndarray, with
     return sp.csr_matrix((values, (rows, cols)), shape=(count, layout.size))
 
 
+SPHERE_INERTIA = 0.4  # I / (m r²) of a solid sphere
+DISC_INERTIA = 0.5  # I / (m r²) of a solid disc (a cylinder about its axis)
+UNIT_THICKNESS = 1.0  # m: a 2D grain is a disc of this thickness (masses in kg per metre of thickness)
+
+
+def disc_mass(sphere_mass: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """Mass (kg per metre of thickness, UNIT_THICKNESS) of the disc of each sphere's radius and density:
+    ρ π r² · 1 m = m_sphere · 3 / (4 r). Shapes (N,); the 2D grain of the study's simulations."""
+    return sphere_mass * 3.0 / (4.0 * radius) * UNIT_THICKNESS
+
+
 def mass_diagonal(scene: Scene, layout: Layout) -> np.ndarray:
-    """Diagonal of M over the unknowns, divided by the mean mass: m for v, I/r² = 0.4 m for w."""
+    """Diagonal of M over the unknowns, divided by the mean mass: m for v, I/r² for w, with
+    I/r² = 0.5 m for a 2D grain (a disc) and 0.4 m in 3D (a sphere)."""
     m = scene.mass[layout.mobile] / scene.mass[layout.mobile].mean()
-    per_body = np.stack([m, m, 0.4 * m], axis=1) if layout.planar else np.stack([m, m, m, 0.4 * m, 0.4 * m, 0.4 * m], axis=1)
-    return per_body.ravel()
+    if layout.planar:
+        return np.stack([m, m, DISC_INERTIA * m], axis=1).ravel()
+    return np.stack([m, m, m, *([SPHERE_INERTIA * m] * 3)], axis=1).ravel()
 
 
 def solve(P: sp.csc_matrix, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, cones: list[int], linear: int, solver: str,

@@ -32,6 +32,7 @@ from orchestrator.case import Case, CaseError, Name, Real, Strict, parse_case, p
 from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
 from orchestrator.engine_sections import StudyEngineSections
 from orchestrator.results import Trajectory
+from orchestrator.studies.collapse.fields import FieldsSpec
 
 GRAIN, WALL = "grain", "wall"  # one grain material: the rough bed's grains are glued grains (`fixed`)
 # Solid fraction of a frictionless rain, used only to size the rain (the column is levelled after):
@@ -111,6 +112,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     contacts: CollapseContacts = CollapseContacts()
     preparation: PreparationSpec = PreparationSpec()
     release: CollapseRelease = CollapseRelease()
+    fields: FieldsSpec = FieldsSpec()  # where the depth profiles and the erosion waves are read
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
     # default runout by less than the grain size (see docs/studies/collapse.md).
     time_safety_factor: Real(unit="1", gt=0.0, le=0.5) = 0.05
@@ -125,6 +127,8 @@ class CollapseStudy(StudyEngineSections, Strict):
             raise ValueError(f"column: length and height must be at least two grain diameters ({2 * d} m)")
         if self.bed.glued == "random" and self.dimension == 2:
             raise ValueError("bed.glued: 'random' needs dimension 3 (a plane holds one row of grains)")
+        if self.fields.stations and max(self.fields.stations) * self.column.length > self.channel.length:
+            raise ValueError(f"fields.stations: at most channel.length / column.length ({self.channel.length / self.column.length:g}) R0 past the gate")
         if 0.0 < self.bed.erodible_thickness < 0.5 * d:
             raise ValueError(f"bed.erodible_thickness: 0, or at least half a grain diameter ({0.5 * d} m)")
         return self

@@ -19,6 +19,7 @@ from orchestrator.post import collapse as cm
 from orchestrator.results import Trajectory
 from orchestrator.rundir import saved_case
 from orchestrator.studies.base import StageProgress, StudyKind
+from orchestrator.studies.collapse.fields import field_metrics, measure_fields
 from orchestrator.studies.collapse.spec import CollapseStudy, preparation_case, release_case
 
 
@@ -92,6 +93,7 @@ def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray, g_n
     entrained = [cm.entrained_mass(frame, start, masses, bed, study.grains.diameter) for frame in position]
     probes = {f"{at:g}": [cm.static_flowing_interface(frame[:, 2], v[:, 0], frame[:, 0], radii, at, study.grains.diameter)
                           for frame, v in zip(position, velocity)] for at in (study.column.length, 2 * study.column.length)}
+    fields, field_arrays = measure_fields(study, np.nan_to_num(position, nan=-1e9), np.nan_to_num(velocity), radii, mobile, bed, times, front)
     final_speeds = np.linalg.norm(velocity[-1][mobile & ~lost], axis=1)
     report: dict[str, Any] = {
         "grains": {"glued": int(glued.sum()), "column": int(column.sum()), "bed": int(bed.sum()), "lost": int(lost.sum())},
@@ -109,8 +111,9 @@ def measure(study: CollapseStudy, trajectory: Trajectory, glued: np.ndarray, g_n
             "interface": probes,
         },
         "final_max_speed": float(final_speeds.max()) if final_speeds.size else 0.0,
+        "fields": fields,
     }
-    arrays = {"time": times, "edges": grid.edges, "thickness": thickness, "front": front, "front_velocity": speed}
+    arrays = {"time": times, "edges": grid.edges, "thickness": thickness, "front": front, "front_velocity": speed, **field_arrays}
     return report, arrays
 
 
@@ -123,4 +126,4 @@ def collapse_metrics(report: dict[str, Any]) -> dict[str, float]:
         metrics[f"front.{key}"] = float(front[key])
     metrics["front.slow_phase"] = float(bool(front["slow_phase"]))
     metrics["front.at_rest"] = float(bool(front["at_rest"]))
-    return metrics
+    return {**metrics, **field_metrics(report)}
