@@ -181,3 +181,19 @@ def test_a_2d_deck_loads_its_grains_as_discs_and_rescales_the_rest_mass() -> Non
     rest = rest_of_discs({"mass": float(spheres[:2].sum()), "speed": 0.01}, scene, deck)
     assert rest["mass"] == pytest.approx(2500.0 * math.pi * (radii[:2] ** 2).sum(), rel=1e-12)
     assert load_scene({**deck, "planar": False}).mass.tolist() == spheres.tolist()
+
+
+@pytest.mark.engine
+def test_a_2d_run_records_its_grains_as_discs(tmp_path: Path) -> None:
+    """results.h5 of a planar cocd run holds each grain's disc mass (kg per metre) and disc inertia ½ m r²,
+    so the rotational energy post-processing computes is the disc's."""
+    case = parse_case({
+        "name": "disc", "engine": "cocd", "planar": True, "time": {"duration": 0.01, "output_interval": 0.005},
+        "materials": [{"name": "glass", "density": 2500.0}],
+        "contacts": [{"materials": ["glass", "glass"], "en2": 0.5, "mu": 0.5, "kn": 1e5, "kt_over_kn": 0.4}],
+        "bodies": {"spheres": [{"material": "glass", "radius": 0.002, "position": [0.0, 0.0, 0.1], "angular_velocity": [0.0, 3.0, 0.0]}]}})
+    run_case(case, tmp_path, tmp_path / "run")
+    result = read_results(tmp_path / "run" / "results.h5")
+    mass = 2500.0 * math.pi * 0.002**2
+    assert result.mass[0] == pytest.approx(mass, rel=1e-12)
+    assert result.inertia[0].tolist() == pytest.approx([0.5 * mass * 0.002**2] * 3, rel=1e-12)

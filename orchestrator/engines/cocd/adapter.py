@@ -21,6 +21,7 @@ from orchestrator.plan import RunPlan
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.checkpoint import segment_name
+from orchestrator.engines.cocd.solver import DISC_INERTIA
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, run_engine
 
 DECK_NAME = "cocd.json"
@@ -104,7 +105,11 @@ class CocdAdapter(AdapterDefaults):
             raise EngineError("cocd ended without finishing", deck, rundir / self.log_name(plan), tail)
 
     def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
-        return common.frame_stream_trajectory(plan, rundir, FRAMES_NAME, rundir / DECK_NAME, "cocd", orientation_tracked=False)
+        trajectory = common.frame_stream_trajectory(plan, rundir, FRAMES_NAME, rundir / DECK_NAME, "cocd", orientation_tracked=False)
+        if plan.case.planar:  # 2D grains are discs: the frames carry their mass per metre, their inertia is ½ m r² (solver.py)
+            moment = DISC_INERTIA * trajectory.mass * trajectory.radius**2
+            trajectory.inertia = np.repeat(moment[:, None], 3, axis=1)
+        return trajectory
 
     def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
         return common.last_stream_step(rundir, FRAMES_NAME, plan.schedule.dt)
