@@ -61,3 +61,35 @@ def test_workers_die_with_a_campaign_killed_as_they_start(tmp_path: Path) -> Non
         for worker in workers:
             if alive(worker):
                 worker.kill()
+
+
+@pytest.mark.engine
+def test_dask_workers_die_with_a_campaign_killed_as_they_work(tmp_path: Path) -> None:
+    """The Dask executor (a LocalCluster): its nannies and workers leave with the campaign process."""
+    data = case_data(engine="cocd")
+    data["time"]["duration"] = 2.0
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(data))
+    (tmp_path / "campaign.yaml").write_text(yaml.safe_dump({"name": "killed", "base": "base.yaml", "designs": [
+        {"kind": "grid", "parameters": {"gravity.2": [-9.81, -5.0]}}]}))
+    campaign = subprocess.Popen([sys.executable, "-m", "orchestrator.cli", "campaign", "run", "campaign.yaml", "-o", "out", "-j", "2",
+                                 "--executor", "dask"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                start_new_session=True)
+    parent = psutil.Process(campaign.pid)
+    children: list[psutil.Process] = []
+    started = time.monotonic()
+    while len(children) < 3 and time.monotonic() - started < 60 and campaign.poll() is None:
+        children = parent.children(recursive=True)
+        time.sleep(0.05)
+    campaign.send_signal(signal.SIGKILL)
+    campaign.wait()
+    assert children, "the campaign started no Dask process"
+    try:
+        deadline = time.monotonic() + 15.0
+        while any(alive(child) for child in children) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        survivors = [child.pid for child in children if alive(child)]
+        assert not survivors, f"Dask processes {survivors} outlived their campaign"
+    finally:
+        for child in children:
+            if alive(child):
+                child.kill()
