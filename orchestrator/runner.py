@@ -19,7 +19,7 @@ from orchestrator import __version__, rundir
 from orchestrator.case import Case
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
 from orchestrator.engines import checkpoint
-from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback
+from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, log_tail
 from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
@@ -178,16 +178,8 @@ def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> None:
     YADE and cocd would carry them on): an EngineError counting them by one rule (post.lost)."""
     lost = lost_bodies(trajectory, plan.domain.lower, plan.domain.upper)
     if len(lost):
-        raise EngineError(lost.message(), deck, deck.parent / LOG_NAME, _log_tail(deck.parent / LOG_NAME))
-
-
-def _log_tail(log: Path, size: int = 16384) -> list[str]:
-    """The last lines of an engine log (its last `size` bytes at most), [] when there is none."""
-    if not log.is_file():
-        return []
-    with log.open("rb") as handle:
-        handle.seek(max(0, log.stat().st_size - size))
-        return handle.read().decode(errors="replace").splitlines()[-TAIL_LINES:]
+        log = deck.parent / checkpoint.segment_name(LOG_NAME, plan.segment)
+        raise EngineError(lost.message(), deck, log, log_tail(log)[-TAIL_LINES:])
 
 
 def ensure_run(

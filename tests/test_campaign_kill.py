@@ -51,16 +51,21 @@ def test_workers_die_with_a_campaign_killed_as_they_start(tmp_path: Path) -> Non
     campaign.send_signal(signal.SIGKILL)  # the moment a worker exists, before it has even imported the package
     campaign.wait()
     assert workers, "the campaign started no worker"
+    assert_all_die(workers, 5.0)
+
+
+def assert_all_die(processes: list[psutil.Process], seconds: float) -> None:
+    """Every process has ended within `seconds` (any left is killed after the check)."""
     try:
-        deadline = time.monotonic() + 5.0
-        while any(alive(worker) for worker in workers) and time.monotonic() < deadline:
+        deadline = time.monotonic() + seconds
+        while any(alive(process) for process in processes) and time.monotonic() < deadline:
             time.sleep(0.1)
-        survivors = [worker.pid for worker in workers if alive(worker)]
-        assert not survivors, f"workers {survivors} outlived their campaign"
+        survivors = [process.pid for process in processes if alive(process)]
+        assert not survivors, f"processes {survivors} outlived their campaign"
     finally:
-        for worker in workers:
-            if alive(worker):
-                worker.kill()
+        for process in processes:
+            if alive(process):
+                process.kill()
 
 
 @pytest.mark.engine
@@ -83,13 +88,4 @@ def test_dask_workers_die_with_a_campaign_killed_as_they_work(tmp_path: Path) ->
     campaign.send_signal(signal.SIGKILL)
     campaign.wait()
     assert children, "the campaign started no Dask process"
-    try:
-        deadline = time.monotonic() + 15.0
-        while any(alive(child) for child in children) and time.monotonic() < deadline:
-            time.sleep(0.2)
-        survivors = [child.pid for child in children if alive(child)]
-        assert not survivors, f"Dask processes {survivors} outlived their campaign"
-    finally:
-        for child in children:
-            if alive(child):
-                child.kill()
+    assert_all_die(children, 15.0)

@@ -62,3 +62,18 @@ def test_verdicts_follow_the_tolerances(tmp_path: Path) -> None:
     assert len(demo_rows) == 1 and demo_rows[0].count("✓") == 1 and demo_rows[0].count("✗") == 1
     assert len([line for line in page.splitlines() if line.startswith("| ") and "–" in line]) >= len(DEMO_METRICS)
     assert (tmp_path / "avalanche_demo.png").stat().st_size > 10_000
+
+
+def test_recording_one_engine_keeps_the_others_rows_and_dates() -> None:
+    """`demorch validation -e liggghts` adds to the record: YADE's rows, its date and the collapse row stay."""
+    from orchestrator.studies.validation_page import merge_records
+
+    committed = json.loads(RECORD.read_text())
+    new = {"recorded": {"liggghts": "2030-01-01"}, "versions": {"liggghts": "X"}, "drops": {"liggghts": {"new": 1}},
+           "demo": {"liggghts": {"new": 2}}}
+    merged = merge_records(committed, new)
+    assert merged["drops"]["yade"] == committed["drops"]["yade"] and merged["demo"]["yade"] == committed["demo"]["yade"]
+    assert merged["drops"]["liggghts"] == {"new": 1} and merged["versions"] == {**committed["versions"], "liggghts": "X"}
+    earlier = committed["recorded"] if isinstance(committed["recorded"], str) else committed["recorded"]["yade"]
+    assert merged["recorded"] == {**merged["recorded"], "liggghts": "2030-01-01", "yade": earlier}
+    assert merged["collapse"] == committed["collapse"]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from orchestrator.cli.common import EXIT_ENGINE, REPO_ROOT, console, fail
+from orchestrator.cli.common import EXIT_DAMAGED, EXIT_ENGINE, REPO_ROOT, console, fail
 from orchestrator.engines import ENGINE_NAMES, EngineError, engines_with, get_adapter
 
 DEFAULT_RECORD = REPO_ROOT / "docs" / "validation" / "record.json"
@@ -47,8 +47,13 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
                                            demo=demo, progress=lambda stage: console.print(stage))
         except EngineError as error:
             fail(str(error), code=EXIT_ENGINE)
-        if record_path.is_file():  # the collapse row is recorded apart (demorch collapse record): keep its link
-            record["collapse"] = json.loads(record_path.read_text()).get("collapse")
+        if record_path.is_file():  # engines not run again keep their rows; the collapse row is recorded apart (demorch collapse record)
+            try:
+                record = pages.merge_records(json.loads(record_path.read_text()), record)
+            except (OSError, ValueError) as error:  # keep what was just measured beside the damaged record
+                kept = record_path.with_name(record_path.stem + ".new.json")
+                kept.write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
+                fail(f"--record: cannot read {record_path} to add to it ({error}); this run's record is in {kept}", code=EXIT_DAMAGED)
         record_path.parent.mkdir(parents=True, exist_ok=True)
         record_path.write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         console.print(f"record: {record_path}")

@@ -159,6 +159,16 @@ class AdapterDefaults:
         return {"inputs": template_hash(self.name)}
 
 
+def log_tail(path: Path, size: int = 16384) -> list[str]:
+    """The lines of the last `size` bytes of an engine log ([] when there is none): read from the end,
+    however long the log."""
+    if not path.is_file():
+        return []
+    with path.open("rb") as handle:
+        handle.seek(max(0, path.stat().st_size - size))
+        return handle.read().decode("utf-8", "replace").splitlines()
+
+
 def die_with_parent() -> None:
     """Ask Linux to SIGKILL this process when its parent dies, so no engine outlives a killed campaign."""
     try:

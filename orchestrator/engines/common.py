@@ -37,17 +37,13 @@ AT_REST_MARKER = "DEMORCH_AT_REST"
 def at_rest_attrs(rundir: Path, dt: float) -> dict[str, float]:
     """{'stopped_at_rest': time, 'rest_speed': m/s} when the engine ended the run at rest (its log says
     `DEMORCH_AT_REST step N speed v` or `... time t speed v`), else {}. Only the log's tail is read."""
-    from orchestrator.engines.base import LOG_NAME
+    from orchestrator.engines.base import LOG_NAME, log_tail
     from orchestrator.engines.checkpoint import segment_files
 
     logs = segment_files(rundir, LOG_NAME)
     if not logs:
         return {}
-    log = logs[-1]  # the last segment's
-    with log.open("rb") as handle:
-        handle.seek(max(0, log.stat().st_size - 65536))
-        tail = handle.read().decode("utf-8", "replace").splitlines()
-    for line in reversed(tail):
+    for line in reversed(log_tail(logs[-1], 65536)):  # the last segment's log
         words = line.split()
         if len(words) == 5 and words[0] == AT_REST_MARKER:
             moment = float(words[2]) * dt if words[1] == "step" else float(words[2])

@@ -121,7 +121,8 @@ def record_runs(engines: dict[str, str], workdir: Path, demo: bool = False,
                 progress: Callable[[str], None] = lambda stage: None) -> dict[str, Any]:
     """Run the checks on each engine (name → version). About a minute per engine for the drops;
     with `demo`, three demo avalanches per engine more (2–6 minutes each)."""
-    record: dict[str, Any] = {"recorded": dt.date.today().isoformat(), "versions": engines, "drops": {}, "demo": {}}
+    today = dt.date.today().isoformat()
+    record: dict[str, Any] = {"recorded": {name: today for name in engines}, "versions": engines, "drops": {}, "demo": {}}
     for engine in engines:
         progress(f"{engine}: single-brick drops")
         record["drops"][engine] = record_drops(engine, workdir)
@@ -129,6 +130,26 @@ def record_runs(engines: dict[str, str], workdir: Path, demo: bool = False,
             progress(f"{engine}: demo avalanche, seeds {', '.join(map(str, DEMO_SEEDS))}")
             record["demo"][engine] = record_demo(engine, workdir)
     return record
+
+
+def merge_records(old: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
+    """`new` (engines just recorded) over `old`: an engine not run again keeps its rows and its date,
+    and what was recorded apart (the collapse row) stays."""
+    recorded = old.get("recorded")
+    if isinstance(recorded, str):  # a record of one date for all its engines
+        recorded = {name: recorded for name in old.get("versions", {})}
+    merged = {**old, **new}
+    for key, earlier in (("recorded", recorded or {}), ("versions", old.get("versions", {})), ("drops", old.get("drops", {})),
+                         ("demo", old.get("demo", {}))):
+        merged[key] = {**earlier, **new.get(key, {})}
+    return merged
+
+
+def _measured(record: dict[str, Any]) -> str:
+    """'liggghts VERSION (DATE), …': each engine with the version and the day its rows were recorded."""
+    recorded = record["recorded"]
+    return ", ".join(f"{name} {version} ({recorded if isinstance(recorded, str) else recorded.get(name, '?')})"
+                     for name, version in record["versions"].items())
 
 
 def _plain(value: Any) -> Any:
@@ -156,8 +177,7 @@ def render_page(record: dict[str, Any], figures: Path, figures_link: str = "vali
     engines = list(record["versions"])
     reference = brick_drop.reference()
     lines = ["# Validation", "",
-             f"Measured {record['recorded']} with `demorch validation` on "
-             + ", ".join(f"{name} {version}" for name, version in record["versions"].items())
+             f"Measured with `demorch validation` on {_measured(record)}"
              + ". Every number below is read from the recorded runs (`docs/validation/record.json`); "
              "the page is written from that record, never by hand. Engine parity on micro-cases "
              "(restitution, spin, friction) has its own page: [engine parity](parity.md).", ""]

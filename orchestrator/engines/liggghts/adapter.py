@@ -30,24 +30,21 @@ _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step a
 
 
 class ThermoWatcher:
-    """Reads thermo lines (step atoms ke): simulated time for progress, and the atom count; calls
-    on_step(step) at each (the adapter prunes its checkpoints there)."""
+    """Reads thermo lines (step atoms ke): simulated time for progress and the last step; calls
+    on_step(step) at each (the adapter seals and prunes its checkpoints there). Lost bodies are
+    counted from the frames (post.lost), not from the atom count."""
 
     def __init__(self, dt: float, on_step: Callable[[int], None] | None = None):
         self.dt = dt
         self.on_step = on_step
-        self.first_atoms: int | None = None
-        self.last_atoms: int | None = None
         self.last_step = 0
 
     def __call__(self, line: str) -> float | None:
         match = _THERMO_LINE.match(line)
         if not match:
             return None
-        step, atoms, kinetic = int(match.group(1)), int(match.group(2)), match.group(3)
-        # The most atoms seen, not the first count: clumps are inserted after step 0.
-        self.first_atoms = atoms if self.first_atoms is None else max(self.first_atoms, atoms)
-        self.last_atoms, self.last_step = atoms, step
+        step, kinetic = int(match.group(1)), match.group(3)
+        self.last_step = step
         if self.on_step is not None:
             self.on_step(step)
         try:
