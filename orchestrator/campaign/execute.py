@@ -52,7 +52,7 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
             plan = _case_plan(point_json, Path(case_dir)) if kind == "case" else None
-            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, Path(case_dir), plan):
+            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, Path(case_dir), kind, plan):
                 rundir.retire(path, path.parent.parent)
             return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options, plan)
     except rundir.Busy:
@@ -68,9 +68,12 @@ def _case_plan(point_json: str, case_dir: Path) -> RunPlan | None:
         return None
 
 
-def _continues(path: Path, case_dir: Path, plan: RunPlan | None) -> bool:
-    """A point cut off mid-run that goes on from its checkpoint (a study point: its release's)."""
-    return resumable(path, case_dir, plan) if plan is not None else resumable(path / RELEASE_DIR, path)
+def _continues(path: Path, case_dir: Path, kind: str, plan: RunPlan | None) -> bool:
+    """A point cut off mid-run that goes on from its checkpoint (a study point: its release's; a
+    case that no longer passes its checks never does)."""
+    if kind != "case":
+        return resumable(path / RELEASE_DIR, path)
+    return plan is not None and resumable(path, case_dir, plan)
 
 
 def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float,
