@@ -60,7 +60,8 @@ def now() -> str:
 # -- identity -----------------------------------------------------------------------------------
 # The identity leaves out every field equal to its default, so adding a field with a default keeps
 # every id. Changing what an existing default *is* must change ids: bump this, and record the new
-# defaults (tests/test_identity.py holds the defaults of each schema version).
+# defaults (tests/identity_defaults.json, written by running tests/test_identity.py; a test fails
+# when a recorded default changed without a new version).
 SCHEMA_VERSION = 1
 
 

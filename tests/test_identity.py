@@ -204,3 +204,39 @@ def test_one_adapter_runs_two_cases_interleaved_as_it_runs_each_alone(engine: st
 
     assert [summary.summary(t) for t in outputs] == alone
     assert outputs[0].position[-1, 0, 2] < outputs[1].position[-1, 0, 2]  # the stronger gravity fell further
+
+
+DEFAULTS = Path(__file__).with_name("identity_defaults.json")
+
+
+def current_defaults() -> dict[str, object]:
+    """'Model.Section.field' → default (JSON) of every field of the case and the study models, from their JSON Schemas."""
+    from orchestrator.studies.registry import STUDY_KINDS
+
+    found: dict[str, object] = {}
+    for model in (Case, *(kind.model for kind in STUDY_KINDS.values())):
+        schema = model.model_json_schema()
+        sections = {model.__name__: schema, **{f"{model.__name__}.{name}": part for name, part in schema.get("$defs", {}).items()}}
+        for section, part in sections.items():
+            for field, spec in part.get("properties", {}).items():
+                if "default" in spec:
+                    found[f"{section}.{field}"] = spec["default"]
+    return found
+
+
+def test_a_default_changes_only_with_the_schema_version() -> None:
+    """The id leaves defaults out, so a default whose value changes would silently keep every id: such a
+    change must come with a new rundir.SCHEMA_VERSION (and this record, written by running this file).
+    New fields with defaults are free."""
+    recorded = json.loads(DEFAULTS.read_text())
+    if recorded["schema_version"] != rundir.SCHEMA_VERSION:
+        pytest.fail(f"rundir.SCHEMA_VERSION is {rundir.SCHEMA_VERSION}, the defaults are recorded for {recorded['schema_version']}: "
+                    "record them again with `.venv/bin/python tests/test_identity.py`")
+    now = current_defaults()
+    changed = {key: (value, now[key]) for key, value in recorded["defaults"].items() if key in now and now[key] != value}
+    assert not changed, f"defaults changed without a new rundir.SCHEMA_VERSION (recorded, now): {changed}"
+
+
+if __name__ == "__main__":
+    DEFAULTS.write_text(json.dumps({"schema_version": rundir.SCHEMA_VERSION, "defaults": current_defaults()}, indent=1, sort_keys=True) + "\n")
+    print(f"recorded {DEFAULTS}")
