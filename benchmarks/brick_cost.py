@@ -24,7 +24,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
-from orchestrator.bricks import BrickClump  # noqa: E402
+from orchestrator.shapes.clump import BrickClump  # noqa: E402
 from orchestrator.case import Case, parse_case  # noqa: E402
 from orchestrator.runner import run_case  # noqa: E402
 from orchestrator.studies.avalanche.packing import loose_grid  # noqa: E402

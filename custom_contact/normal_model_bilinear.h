@@ -94,22 +94,39 @@ namespace ContactModels
       sidata.gamman = 0.0;
       sidata.gammat = 0.0;
 
-      if (sidata.is_wall)
+      const double scale = sidata.is_wall ? sidata.area_ratio : 1.0;
+      const double F[3] = { Fn * scale * sidata.en[0], Fn * scale * sidata.en[1], Fn * scale * sidata.en[2] };
+      i_forces.delta_F[0] += F[0];
+      i_forces.delta_F[1] += F[1];
+      i_forces.delta_F[2] += F[2];
+      if (!sidata.is_wall)
       {
-        const double Fn_ = Fn * sidata.area_ratio;
-        i_forces.delta_F[0] += Fn_ * sidata.en[0];
-        i_forces.delta_F[1] += Fn_ * sidata.en[1];
-        i_forces.delta_F[2] += Fn_ * sidata.en[2];
+        j_forces.delta_F[0] -= F[0];
+        j_forces.delta_F[1] -= F[1];
+        j_forces.delta_F[2] -= F[2];
       }
-      else
+#ifdef NONSPHERICAL_ACTIVE_FLAG
+      // A non-spherical body (superquadric) touches off its centre line: the normal force has a
+      // moment about each centre, r x F with r from the centre to the contact point. Without it a
+      // brick landing on a corner would never start to turn.
+      if (sidata.is_non_spherical)
       {
-        i_forces.delta_F[0] += Fn * sidata.en[0];
-        i_forces.delta_F[1] += Fn * sidata.en[1];
-        i_forces.delta_F[2] += Fn * sidata.en[2];
-        j_forces.delta_F[0] += -i_forces.delta_F[0];
-        j_forces.delta_F[1] += -i_forces.delta_F[1];
-        j_forces.delta_F[2] += -i_forces.delta_F[2];
+        double r[3], torque[3];
+        vectorSubtract3D(sidata.contact_point, atom->x[sidata.i], r);
+        vectorCross3D(r, F, torque);
+        i_forces.delta_torque[0] += torque[0];
+        i_forces.delta_torque[1] += torque[1];
+        i_forces.delta_torque[2] += torque[2];
+        if (!sidata.is_wall)
+        {
+          vectorSubtract3D(sidata.contact_point, atom->x[sidata.j], r);
+          vectorCross3D(r, F, torque);
+          j_forces.delta_torque[0] -= torque[0];
+          j_forces.delta_torque[1] -= torque[1];
+          j_forces.delta_torque[2] -= torque[2];
+        }
       }
+#endif
     }
 
     inline void surfacesClose(SurfacesCloseData & scdata, ForceData &, ForceData &)

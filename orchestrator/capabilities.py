@@ -30,6 +30,8 @@ class Capabilities:
         `default_step`, not a fraction of a contact duration.
     state_file: the file `save_state` writes in the run directory (None: no restart file).
     contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
+    shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric).
+    glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
     """
 
     clumps: bool
@@ -42,6 +44,8 @@ class Capabilities:
     default_step: float | None = None
     state_file: str | None = None
     contact_output: bool = False
+    shape_kinds: tuple[str, ...] = ("clump",)
+    glued_kinds: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -62,14 +66,15 @@ ENGINES: dict[str, EngineEntry] = {
             "liggghts",
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
-                         implicit=False, state_file="state.restart", contact_output=True),
+                         implicit=False, state_file="state.restart", contact_output=True,
+                         shape_kinds=("clump", "superquadric"), glued_kinds=("superquadric",)),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
         ),
         EngineEntry(
             "yade",
             "orchestrator.engines.yade.adapter:YadeAdapter",
             Capabilities(clumps=True, mixed_bodies=True, meshes=True, mpi=False, restart=False, compiled_law=False,
-                         implicit=False, contact_output=True),
+                         implicit=False, contact_output=True, glued_kinds=("clump",)),
             "YADE 2023.02a (Debian), the bilinear law emulated by a dashpot",
             (("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
              ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)")),

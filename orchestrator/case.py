@@ -13,8 +13,9 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from orchestrator.bricks import BrickClump, brick_clump
-from orchestrator.capabilities import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.shapes import KINDS, BodyShape, make_shape
+from orchestrator.shapes.clump import BrickClump
+from orchestrator.capabilities import DEFAULT_ENGINE, ENGINE_NAMES, Engine, capabilities
 from orchestrator.engine_sections import EngineSections
 from orchestrator.validation import CaseError, parse_model, read_yaml  # noqa: F401  (CaseError re-exported)
 
@@ -136,13 +137,20 @@ class Sphere(Strict):
     fixed: bool = False
 
 
-class BrickShape(Strict):
-    """A brick (box) made of a clump of layout[0] × layout[1] × layout[2] spheres (see bricks.py).
+ShapeKind = Literal[tuple(KINDS)]  # type: ignore[valid-type]
 
-    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; bricks.py says which).
+
+class BrickShape(Strict):
+    """A brick (box) of length × width × thickness, realised as `kind` (orchestrator/shapes):
+    `clump`, a clump of layout[0] × layout[1] × layout[2] spheres (see shapes/clump.py), or
+    `superquadric`, one body with flat faces and rounded edges of the given blockiness (see
+    shapes/superquadric.py). Either way the body has the true brick's mass and inertia.
+
+    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; clumps only).
     """
 
     name: Name
+    kind: ShapeKind = "clump"
     length: Real(unit="m", gt=0.0, le=10.0)
     width: Real(unit="m", gt=0.0, le=10.0)
     thickness: Real(unit="m", gt=0.0, le=10.0)
@@ -152,12 +160,17 @@ class BrickShape(Strict):
     # thickness axes) when given; default: those of the (rounded) box at the material's density.
     mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
     inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
-    # Edges and corners rounded at this radius (m): eight corner spheres join the layout (bricks.py).
+    # Edges and corners rounded at this radius (m): eight corner spheres join the layout (shapes/clump.py).
     # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
     rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
+    # Superquadric only: the exponents (n1 across the thickness, n2 in the length-width plane); 2 is
+    # an ellipsoid, larger is blockier (flatter faces, sharper edges, a costlier contact search).
+    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (16.0, 16.0)
 
     @model_validator(mode="after")
     def _physical_inertia(self) -> "BrickShape":
+        if self.kind != "clump" and self.bevel_deg:
+            raise ValueError(f"bevel_deg: a {self.kind} brick has no bevelled faces; allowed: 0, or kind: clump (got {self.bevel_deg!r})")
         limit = min(self.length, self.width, self.thickness) / 2.0
         if self.rounding and (self.bevel_deg or self.rounding >= limit):
             raise ValueError(f"rounding: needs bevel_deg 0; allowed range: [0, {limit:g}) (got {self.rounding!r})")
@@ -167,12 +180,21 @@ class BrickShape(Strict):
                 raise ValueError(f"inertia: no solid has these principal moments (the largest, {c!r}, exceeds the sum of the other two)")
         return self
 
+    def body(self, density: float) -> BodyShape:
+        """The body shape (mass, inertia, extent, surface…) at the material's density (kg/m³)."""
+        return make_shape(self, density)
+
     def clump(self, density: float) -> BrickClump:
-        return brick_clump(self.length, self.width, self.thickness, density, self.layout, self.bevel_deg, self.mass, self.inertia, self.rounding)
+        """The body as a clump of spheres; ValueError for another kind (engine code that needs spheres)."""
+        body = self.body(density)
+        if not isinstance(body, BrickClump):
+            raise ValueError(f"shapes.{self.name}: a {self.kind} brick has no spheres")
+        return body
 
 
 class Clump(Strict):
-    """A rigid clump of spheres with the shape's true mass and inertia."""
+    """A rigid body of one of the case's shapes (a clump of spheres or a superquadric), with the
+    shape's true mass and inertia."""
 
     shape: Name
     material: Name
@@ -180,6 +202,8 @@ class Clump(Strict):
     orientation: tuple[QuaternionPart, QuaternionPart, QuaternionPart, QuaternionPart] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
     velocity: Velocity = (0.0, 0.0, 0.0)
     angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
+    # Glued: the body never moves (it still touches others), e.g. the lower brick of a sliding test.
+    fixed: bool = False
 
     @field_validator("orientation")
     def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
@@ -384,6 +408,15 @@ def engine_limits(case: Case) -> str | None:
     for field, used, capability, reason in checks:
         if used and not getattr(can, capability):
             return f"{field}: {reason}; engines that can: {', '.join(engines_with(**{capability: True}))}"
+    used_kinds = {case.shape(c.shape).kind for c in case.bodies.clumps}
+    for i, shape in enumerate(case.shapes):
+        if shape.kind in used_kinds and shape.kind not in can.shape_kinds:
+            able = [name for name in ENGINE_NAMES if shape.kind in capabilities(name).shape_kinds]
+            return f"shapes.{i}.kind: {engine} takes {', '.join(can.shape_kinds)} bodies, not {shape.kind}; engines that can: {', '.join(able)}"
+    glued = {case.shape(c.shape).kind for c in case.bodies.clumps if c.fixed}
+    for kind in sorted(glued - set(can.glued_kinds)):
+        able = [name for name in ENGINE_NAMES if kind in capabilities(name).glued_kinds]
+        return f"bodies.clumps.fixed: {engine} cannot glue a {kind} body; engines that can: {', '.join(able) or 'none'}"
     return None
 
 

@@ -31,7 +31,7 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator.bricks import brick_clump, quaternion_matrices, quaternion_matrix
+from orchestrator.shapes.clump import brick_clump, quaternion_matrices, quaternion_matrix
 from orchestrator.case import Case, parse_case
 from orchestrator.engines import EngineError
 from orchestrator.capabilities import ENGINE_NAMES, ENGINES, engines_with

@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 from click.testing import CliRunner
 
-from orchestrator.bricks import BrickClump
+from orchestrator.shapes.clump import BrickClump
 from orchestrator.case import Case, parse_case
 from orchestrator.cli.main import main
 from orchestrator.studies.avalanche.packing import loose_grid

@@ -22,7 +22,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("orchestrator", "orchestrator.capabilities", "orchestrator.engine_sections", "orchestrator.imports", "orchestrator.results",
      "orchestrator.validation",
      "orchestrator.figures",
-     "orchestrator.bricks", "orchestrator.contact.law", "orchestrator.contact"),
+     "orchestrator.shapes.clump", "orchestrator.contact.law", "orchestrator.contact"),
     ("orchestrator.case",),
     ("orchestrator.physics", "orchestrator.geometry", "orchestrator.post", "orchestrator.estimate", "orchestrator.preflight", "orchestrator.plan"),
     ("orchestrator.engines",),

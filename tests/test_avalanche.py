@@ -9,7 +9,7 @@ import pytest
 
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
 from orchestrator.studies.avalanche.study import AvalancheStudy, packing_case, run_study
-from orchestrator.bricks import BrickClump, quaternion_matrix
+from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case

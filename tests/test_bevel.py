@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.bricks import BrickClump, quaternion_matrix
+from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.case import parse_case
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case

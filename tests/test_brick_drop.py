@@ -67,7 +67,7 @@ def test_tilted_drops_on_yade_beat_the_old_clump(tmp_path: Path) -> None:
 
 
 def test_the_rounded_brick_has_the_study_volume_and_inertia() -> None:
-    from orchestrator.bricks import brick_clump
+    from orchestrator.shapes.clump import brick_clump
 
     brick = brick_clump(0.031, 0.015, 0.008, 1700.0, (4, 2, 1), rounding=0.001)
     assert brick.volume == pytest.approx(REF["volume"], rel=1e-7)

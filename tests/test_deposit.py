@@ -77,7 +77,7 @@ def test_the_thickness_map_holds_the_highest_top_above_the_ground() -> None:
 
 def test_the_deposit_picture_draws_a_thickness_map(tmp_path) -> None:
     """A constructed deposit of 40 bricks on the board and one far ahead: the picture is written."""
-    from orchestrator.bricks import brick_clump
+    from orchestrator.shapes.clump import brick_clump
     from orchestrator.results import Trajectory
     from orchestrator.studies.avalanche.report import plot_deposit
 

@@ -30,7 +30,7 @@ def test_the_deck_code_is_every_module_the_engine_package_imports() -> None:
     the renderer itself, the plan; and nothing of the studies or the command line."""
     for engine in ("liggghts", "yade", "cocd"):
         modules = build.deck_modules(engine)
-        assert {"orchestrator.bricks", "orchestrator.geometry", "orchestrator.physics", "orchestrator.plan", "orchestrator.case"} <= set(modules)
+        assert {"orchestrator.shapes.clump", "orchestrator.geometry", "orchestrator.physics", "orchestrator.plan", "orchestrator.case"} <= set(modules)
         assert not any(m.startswith(("orchestrator.studies", "orchestrator.cli", "orchestrator.campaign")) for m in modules)
     assert "orchestrator.engines.templating" in build.deck_modules("liggghts")
 
@@ -56,10 +56,10 @@ def _fresh_code_hash() -> None:
 
 def test_editing_the_bricks_sphere_placement_changes_the_build_but_a_docstring_does_not(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     before = build.deck_hash("liggghts", None)
-    _edited_module(monkeypatch, tmp_path, "orchestrator.bricks", "Bricks as clumps ", "Reworded: Bricks as clumps ")
+    _edited_module(monkeypatch, tmp_path, "orchestrator.shapes.clump", "Bricks as clumps ", "Reworded: Bricks as clumps ")
     assert build.deck_hash("liggghts", None) == before  # documentation is not code
     monkeypatch.undo()
-    _edited_module(monkeypatch, tmp_path, "orchestrator.bricks", "(fraction - 0.5)", "(fraction - 0.5000001)")  # spheres a hair elsewhere
+    _edited_module(monkeypatch, tmp_path, "orchestrator.shapes.clump", "(fraction - 0.5)", "(fraction - 0.5000001)")  # spheres a hair elsewhere
     assert build.deck_hash("liggghts", None) != before
 
 
@@ -72,7 +72,7 @@ def test_a_run_made_before_a_brick_edit_is_stale_and_runs_again(monkeypatch: pyt
     assert not reused and rundir.status(directory) == "completed"
     assert ensure_run(case, tmp_path, "free fall") == (directory, True)
     (tmp_path / "edited").mkdir()
-    _edited_module(monkeypatch, tmp_path / "edited", "orchestrator.bricks", "(fraction - 0.5)", "(fraction - 0.5000001)")
+    _edited_module(monkeypatch, tmp_path / "edited", "orchestrator.shapes.clump", "(fraction - 0.5)", "(fraction - 0.5000001)")
     assert rundir.status(directory) == "stale"
     again, reused = ensure_run(case, tmp_path, "free fall")
     assert not reused and again != directory and rundir.status(again) == "completed"

@@ -220,7 +220,7 @@ def doctor() -> None:
 @click.option("--density", type=click.FloatRange(min=0.0, min_open=True), default=1700.0, show_default=True, help="kg/m³.")
 def brick(layouts: tuple[tuple[int, int, int], ...], bevel_deg: float, size: tuple[float, float, float], density: float) -> None:
     """How well each clump resolution fits the brick: spheres, radii, surface gap, mass, inertia."""
-    from orchestrator.bricks import BrickClump
+    from orchestrator.shapes.clump import BrickClump
 
     if min(size) <= 0.0:
         fail(f"--size: every dimension must be > 0 m (got {size})")

@@ -3,7 +3,7 @@
 A run id (orchestrator.rundir) covers the build that turned the inputs into results. Nothing here
 is a list someone keeps: the code is the import closure of the engine's package inside this
 package (orchestrator.imports), so a module the deck depends on, however indirectly (the brick's
-spheres in bricks.py, the wall triangles in geometry.py), is in it the day it is imported. Each
+spheres in shapes/clump.py, the wall triangles in geometry.py), is in it the day it is imported. Each
 module counts by its syntax tree without docstrings, so comments, docstrings and formatting change
 no id; any change to code does. The engine's version is asked of the engine itself, once per
 executable file (cached by path, size and modification time).

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
+from orchestrator.shapes.clump import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case

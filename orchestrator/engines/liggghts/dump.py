@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.bricks import quaternion_matrices
+from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.case import Case
 
 

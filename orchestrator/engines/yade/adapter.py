@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from orchestrator.bricks import world_sphere_centres
+from orchestrator.shapes.clump import world_sphere_centres
 from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common

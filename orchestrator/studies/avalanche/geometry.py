@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
-from orchestrator.bricks import BrickClump, quaternion_matrices
+from orchestrator.shapes.clump import BrickClump, quaternion_matrices
 from orchestrator.studies.avalanche.packing import random_orientations
 
 

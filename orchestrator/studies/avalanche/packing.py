@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from orchestrator.bricks import BrickClump
+from orchestrator.shapes.clump import BrickClump
 
 
 def random_orientations(count: int, seed: int) -> np.ndarray:

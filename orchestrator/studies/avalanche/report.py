@@ -14,7 +14,7 @@ from typing import Any
 import meshio
 import numpy as np
 
-from orchestrator.bricks import BrickClump, bodies_sphere_centres, quaternion_matrices
+from orchestrator.shapes.clump import BrickClump, bodies_sphere_centres, quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains

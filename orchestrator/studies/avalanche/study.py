@@ -19,7 +19,7 @@ from pydantic import Field, model_validator
 
 from orchestrator.post import deposit, front
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
-from orchestrator.bricks import BrickClump
+from orchestrator.shapes.clump import BrickClump
 from orchestrator.case import Case, CaseError, Name, Real, RestStop, Strict, parse_case
 from orchestrator.engines import DEFAULT_ENGINE, Engine, RunOptions, capabilities
 from orchestrator.results import Trajectory
@@ -56,9 +56,9 @@ class BrickSpec(Strict):
     thickness: Real(unit="m", gt=0.0, le=1.0) = 0.008
     density: Real(unit="kg/m³", gt=0.0, le=1e5) = 1700.0
     layout: tuple[int, int, int] = (4, 2, 1)
-    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see bricks.py)
+    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see shapes/clump.py)
     # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
-    # join the layout, and the brick gets the rounded solid's mass and inertia (bricks.py). With them
+    # join the layout, and the brick gets the rounded solid's mass and inertia (shapes/clump.py). With them
     # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
     # (required with a bevel).
     rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001

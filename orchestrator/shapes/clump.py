@@ -46,6 +46,8 @@ class BrickClump:
     # layout's spheres, flush with the faces, lie inside that rounded brick. 0: no corner spheres.
     rounding: float = 0.0
 
+    kind = "clump"
+
     @cached_property
     def vertices(self) -> np.ndarray:
         """(2, 2, 2, 3) corners of the solid, indexed by side (0: −, 1: +) along x, y, z, about the box centre."""
@@ -177,6 +179,18 @@ class BrickClump:
     def bounding_radius(self) -> float:
         return float(np.max(np.linalg.norm(self.centres, axis=1) + self.radii))
 
+    def surface_mesh(self, resolution: int = 12) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices (n, 3) in the body frame, m; triangles (m, 3) indices): each sphere of the clump
+        as a latitude-longitude sphere of `resolution` latitudes (what the engine's body is)."""
+        unit, triangles = unit_sphere_mesh(resolution)
+        vertices = (self.centres[:, None, :] + self.radii[:, None, None] * unit[None, :, :]).reshape(-1, 3)
+        offsets = (np.arange(self.n_spheres) * len(unit))[:, None, None]
+        return vertices, (triangles[None, :, :] + offsets).reshape(-1, 3)
+
+    def lowest_point(self, rotation: np.ndarray) -> float:
+        """Lowest z (m) of the clump's spheres about its centre for the body turned by `rotation` (3, 3)."""
+        return float(((self.centres @ np.asarray(rotation).T)[:, 2] - self.radii).min())
+
     def surface_deviation(self, samples_per_edge: int = 40) -> tuple[float, float]:
         """(max, mean) distance from points on the brick's surface to the surface of the sphere union.
 
@@ -289,3 +303,23 @@ def bodies_sphere_centres(clump: BrickClump, positions: np.ndarray, rotations: n
     """(B, n, 3) sphere centres of B bricks (or one brick at B frames) at `positions` (B, 3) turned
     by `rotations` (B, 3, 3)."""
     return np.asarray(positions, dtype=float)[:, None, :] + np.einsum("bij,sj->bsi", rotations, clump.centres)
+
+
+@lru_cache(maxsize=8)
+def unit_sphere_mesh(resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, triangles) of a unit sphere: `resolution` − 1 latitude rings of 2 × `resolution`
+    points between the two poles."""
+    eta = np.linspace(-math.pi / 2.0, math.pi / 2.0, resolution + 1)[1:-1]
+    omega = np.linspace(0.0, 2.0 * math.pi, 2 * resolution, endpoint=False)
+    rings = np.stack([np.outer(np.cos(eta), np.cos(omega)), np.outer(np.cos(eta), np.sin(omega)),
+                      np.broadcast_to(np.sin(eta)[:, None], (len(eta), len(omega)))], axis=2).reshape(-1, 3)
+    vertices = np.concatenate([[[0.0, 0.0, -1.0]], rings, [[0.0, 0.0, 1.0]]])
+    n_rings, n_around, top = len(eta), len(omega), len(rings) + 1
+    triangles = []
+    for j in range(n_around):
+        k = (j + 1) % n_around
+        triangles += [(0, 1 + k, 1 + j), (top, 1 + (n_rings - 1) * n_around + j, 1 + (n_rings - 1) * n_around + k)]
+        for i in range(n_rings - 1):
+            a, b, c, d = 1 + i * n_around + j, 1 + i * n_around + k, 1 + (i + 1) * n_around + k, 1 + (i + 1) * n_around + j
+            triangles += [(a, b, c), (a, c, d)]
+    return vertices, np.array(triangles, dtype=np.int64)

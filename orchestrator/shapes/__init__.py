@@ -1,0 +1,68 @@
+"""Body shapes: what a body's shape gives the rest of the code, one kind per representation.
+
+A case names a shape's `kind` (`shapes[i].kind`); `KINDS` maps each kind to its module's builder and
+`make_shape` is the one place that picks it (an unknown kind gets one error listing the kinds).
+Studies, pre-flight, plots and dumps use only the `BodyShape` protocol; how an engine realises a
+kind (multisphere template, superquadric atom, YADE clump) lives in that engine's package, and each
+engine declares the kinds it takes (`capabilities.Capabilities.shape_kinds`).
+
+Kinds:
+- `clump`: spheres rigidly joined (shapes/clump.py): every engine; faces are rows of spheres.
+- `superquadric`: one smooth body with flat faces and rounded edges (shapes/superquadric.py).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from orchestrator.shapes.clump import brick_clump
+from orchestrator.shapes.superquadric import brick_superquadric
+
+
+class BodyShape(Protocol):
+    """What every kind of body shape gives (body frame: origin at the centre of mass, brick axes)."""
+
+    kind: str
+    mass: float  # kg, of the true solid
+    volume: float  # m³, of the true solid
+
+    @property
+    def inertia_tensor(self) -> np.ndarray: ...  # (3, 3) kg m² about the centre of mass
+
+    @property
+    def principal_inertia(self) -> np.ndarray: ...  # (3,) kg m² about the brick axes
+
+    @property
+    def bounding_radius(self) -> float: ...  # m, centre to the farthest surface point
+
+    @property
+    def radius(self) -> float: ...  # m, what neighbour skins are sized by
+
+    @property
+    def extent(self) -> np.ndarray: ...  # (3,) m, the centred box holding the solid
+
+    @property
+    def face_contacts(self) -> int: ...  # contacts of a flat landing (the stiffest contact is this × k_n)
+
+    def surface_mesh(self, resolution: int = 24) -> tuple[np.ndarray, np.ndarray]: ...  # (n, 3) m, (m, 3) indices
+
+    def lowest_point(self, rotation: np.ndarray) -> float: ...  # m, lowest z about the centre
+
+
+KINDS: dict[str, Any] = {
+    "clump": lambda s, density: brick_clump(s.length, s.width, s.thickness, density, s.layout, s.bevel_deg, s.mass, s.inertia, s.rounding),
+    "superquadric": lambda s, density: brick_superquadric(s.length, s.width, s.thickness, density, s.blockiness, s.mass, s.inertia, s.rounding),
+}
+
+
+def make_shape(spec: Any, density: float) -> BodyShape:
+    """The body shape of a case's shape entry (`case.BrickShape`) at a material's density (kg/m³).
+
+    Raises ValueError naming the kinds that exist when `spec.kind` is none of them."""
+    try:
+        build = KINDS[spec.kind]
+    except KeyError:
+        raise ValueError(f"shapes.kind: unknown kind {spec.kind!r}; known: {sorted(KINDS)}") from None
+    return build(spec, density)

@@ -1,0 +1,167 @@
+"""The brick as one superquadric body: flat faces, rounded edges, one contact per touching face.
+
+A superquadric of half-axes (a, b, c) and blockiness (n1, n2) is the set
+
+    (|x/a|^n2 + |y/b|^n2)^(n1/n2) + |z/c|^n1 <= 1        (Barr 1981; LIGGGHTS' `atom_style superquadric`)
+
+n = 2 is an ellipsoid; as n grows the body tends to the box 2a × 2b × 2c, its edges rounded over a
+width of about a (1 − 2^(−1/n)) along each face. Its faces are flat to within that: where a clump's
+face is a row of spheres that a neighbour's corner sinks between, a superquadric's face is smooth,
+so two bricks slide on each other at the friction angle (tests/test_brick_pair.py).
+
+The body gets the true brick's mass and inertia (the study's brick: 31 × 15 × 8 mm with 1 mm rounded
+edges, shapes/clump.py `rounded_box_moments`), never those of the superquadric's own volume, so a
+brick's dynamics do not depend on its blockiness; only its surface does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+from scipy.special import beta
+
+from orchestrator.shapes.clump import rounded_box_moments
+
+
+@dataclass(frozen=True)
+class BrickSuperquadric:
+    length: float
+    width: float
+    thickness: float
+    density: float
+    blockiness: tuple[float, float]  # (n1, n2): n1 along the thickness (z), n2 in the x-y plane
+    mass_given: float | None = None
+    inertia_given: tuple[float, float, float] | None = None
+    rounding: float = 0.0  # the true brick's edge rounding (m): its mass and inertia, not the surface's
+
+    kind = "superquadric"
+
+    @property
+    def half_axes(self) -> np.ndarray:
+        """(3,) semi-axes a, b, c (m) along the length, width and thickness."""
+        return np.array([self.length, self.width, self.thickness]) / 2.0
+
+    @cached_property
+    def _moments(self) -> tuple[float, np.ndarray]:
+        volume, _, covariance = rounded_box_moments(np.array([self.length, self.width, self.thickness]), self.rounding)
+        return volume, np.diag(covariance)
+
+    @property
+    def volume(self) -> float:
+        """The true brick's volume (m³), which sets its mass at the material's density."""
+        return self._moments[0]
+
+    @property
+    def superquadric_volume(self) -> float:
+        """The superquadric's own volume (m³): 2 a b c ε1 ε2 B(ε1/2 + 1, ε1) B(ε2/2, ε2/2), ε = 2/n
+        (Jaklič, Leonardis & Solina 2000, eq. 2.60)."""
+        e1, e2 = 2.0 / self.blockiness[0], 2.0 / self.blockiness[1]
+        a, b, c = self.half_axes
+        return float(2.0 * a * b * c * e1 * e2 * beta(e1 / 2.0 + 1.0, e1) * beta(e2 / 2.0, e2 / 2.0))
+
+    @property
+    def mass(self) -> float:
+        return self.mass_given if self.mass_given is not None else self.density * self.volume
+
+    @property
+    def engine_density(self) -> float:
+        """The density (kg/m³) that gives the superquadric's own volume the brick's mass."""
+        return self.mass / self.superquadric_volume
+
+    @cached_property
+    def inertia_tensor(self) -> np.ndarray:
+        """(3, 3) inertia about the centre of mass in the brick axes (diagonal), kg m²."""
+        if self.inertia_given is not None:
+            return np.diag(np.asarray(self.inertia_given, dtype=float))
+        second = self._moments[1]
+        density = self.mass / self.volume
+        return density * np.diag([second[1] + second[2], second[0] + second[2], second[0] + second[1]])
+
+    @property
+    def principal_inertia(self) -> np.ndarray:
+        return np.diag(self.inertia_tensor).copy()
+
+    @property
+    def centroid_offset(self) -> np.ndarray:
+        return np.zeros(3)
+
+    @cached_property
+    def extent(self) -> np.ndarray:
+        """(3,) the box 2a × 2b × 2c that holds the body."""
+        return 2.0 * self.half_axes
+
+    @cached_property
+    def bounding_radius(self) -> float:
+        """Largest distance (m) from the centre to the surface (sampled finely: within 1e-6 of it)."""
+        vertices, _ = self.surface_mesh(96)
+        return float(np.linalg.norm(vertices, axis=1).max())
+
+    @property
+    def radius(self) -> float:
+        """What neighbour skins are sized by: the bounding radius (one body, one particle)."""
+        return self.bounding_radius
+
+    @property
+    def face_contacts(self) -> int:
+        """Contacts when the brick lies on its largest face: one (a face is one smooth surface)."""
+        return 1
+
+    def surface_mesh(self, resolution: int = 24) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices (n, 3) in the body frame, m; triangles (m, 3) indices) of the surface, sampled on
+        the superquadric's parametric grid x = a f(cos η, ε1) f(cos ω, ε2), y = b f(cos η, ε1)
+        f(sin ω, ε2), z = c f(sin η, ε1), f(t, ε) = sign(t) |t|^ε, ε = 2/n; `resolution` rows of η."""
+        return superquadric_mesh(tuple(self.half_axes), tuple(self.blockiness), resolution)
+
+    def lowest_point(self, rotation: np.ndarray) -> float:
+        """Lowest z (m) of the surface about the centre for the body turned by `rotation` (3, 3)."""
+        vertices, _ = self.surface_mesh(48)
+        return float((vertices @ np.asarray(rotation).T)[:, 2].min())
+
+
+def _signed_power(t: np.ndarray, exponent: float) -> np.ndarray:
+    return np.sign(t) * np.abs(t) ** exponent
+
+
+@lru_cache(maxsize=32)
+def superquadric_mesh(half_axes: tuple[float, float, float], blockiness: tuple[float, float], resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cached (vertices, triangles) of a superquadric (see BrickSuperquadric.surface_mesh): a grid of
+    `resolution` + 1 latitudes (poles included, each pole one vertex) by 2 × `resolution` longitudes.
+    Latitudes and longitudes are spread evenly in the parameter t of η = π/2 · sign(t) |t|^(1/ε)
+    so that the flat faces and the rounded edges both get points."""
+    a, b, c = half_axes
+    e1, e2 = 2.0 / blockiness[0], 2.0 / blockiness[1]
+    rows, columns = resolution, 2 * resolution
+
+    def spread(count: int, half_range: float, exponent: float) -> np.ndarray:
+        u = np.linspace(-1.0, 1.0, count)
+        return half_range * np.sign(u) * np.abs(u) ** max(exponent, 1.0)
+
+    eta = spread(rows + 1, math.pi / 2.0, 1.0 / e1 ** 0.5)[1:-1]
+    quarter = spread(columns // 4 * 2 + 1, math.pi / 4.0, 1.0 / e2 ** 0.5)[:-1]  # one side's longitudes
+    omega = np.concatenate([quarter + k * math.pi / 2.0 for k in range(4)])
+    cos_eta, sin_eta = np.cos(eta)[:, None], np.sin(eta)[:, None]
+    ring_x = a * _signed_power(cos_eta, e1) * _signed_power(np.cos(omega)[None, :], e2)
+    ring_y = b * _signed_power(cos_eta, e1) * _signed_power(np.sin(omega)[None, :], e2)
+    ring_z = np.broadcast_to(c * _signed_power(sin_eta, e1), ring_x.shape)
+    rings = np.stack([ring_x, ring_y, ring_z], axis=2).reshape(-1, 3)
+    vertices = np.concatenate([[[0.0, 0.0, -c]], rings, [[0.0, 0.0, c]]])
+    n_rings, n_around = len(eta), len(omega)
+    triangles = []
+    ring = lambda i, j: 1 + i * n_around + j % n_around  # noqa: E731
+    for j in range(n_around):
+        triangles.append((0, ring(0, j + 1), ring(0, j)))
+        triangles.append((len(vertices) - 1, ring(n_rings - 1, j), ring(n_rings - 1, j + 1)))
+        for i in range(n_rings - 1):
+            triangles += [(ring(i, j), ring(i, j + 1), ring(i + 1, j + 1)), (ring(i, j), ring(i + 1, j + 1), ring(i + 1, j))]
+    return vertices, np.array(triangles, dtype=np.int64)
+
+
+@lru_cache(maxsize=256)
+def brick_superquadric(length: float, width: float, thickness: float, density: float, blockiness: tuple[float, float],
+                       mass: float | None = None, inertia: tuple[float, float, float] | None = None, rounding: float = 0.0) -> BrickSuperquadric:
+    """One shared BrickSuperquadric per set of inputs (cases ask once per body)."""
+    return BrickSuperquadric(length, width, thickness, density, tuple(float(n) for n in blockiness),  # type: ignore[arg-type]
+                             mass, None if inertia is None else tuple(float(i) for i in inertia), rounding)
