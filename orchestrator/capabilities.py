@@ -67,7 +67,7 @@ ENGINES: dict[str, EngineEntry] = {
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
                          implicit=False, state_file="state.restart", contact_output=True,
-                         shape_kinds=("clump", "superquadric"), glued_kinds=("superquadric",)),
+                         shape_kinds=("clump", "superquadric"), glued_kinds=("clump", "superquadric")),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
         ),
         EngineEntry(

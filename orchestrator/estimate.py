@@ -60,8 +60,8 @@ def _gb(size: float) -> str:
 
 
 def sphere_count(case: Case) -> int:
-    """Spheres the engine moves: free spheres, and every sphere of every clump."""
-    per_kind = {(c.shape, c.material): case.shape(c.shape).clump(case.material(c.material).density).n_spheres
+    """Particles the engine moves: free spheres, every sphere of every clump, one per superquadric."""
+    per_kind = {(c.shape, c.material): getattr(case.shape(c.shape).body(case.material(c.material).density), "n_spheres", 1)
                 for c in case.bodies.clumps}
     return len(case.bodies.spheres) + sum(per_kind[(c.shape, c.material)] for c in case.bodies.clumps)
 

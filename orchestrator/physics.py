@@ -42,10 +42,10 @@ def bodies(case: Case) -> list[BodyInfo]:
     ]
     for c in case.bodies.clumps:
         shape = case.shape(c.shape)
-        clump = shape.clump(case.material(c.material).density)
-        faces = clump.face_contacts
-        inertia = tuple(float(i) for i in clump.principal_inertia)
-        table.append(BodyInfo(c.material, clump.mass, clump.bounding_radius, c.position, c.velocity, faces, inertia))
+        body = shape.body(case.material(c.material).density)
+        faces = body.face_contacts
+        inertia = tuple(float(i) for i in body.principal_inertia)
+        table.append(BodyInfo(c.material, body.mass, body.bounding_radius, c.position, c.velocity, faces, inertia))
     return table
 
 

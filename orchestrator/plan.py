@@ -139,7 +139,7 @@ def rest_checks(case: Case, schedule: physics.Schedule, removals: Mapping[str, i
         return None
     every, after = checks
     rest = case.time.stop_at_rest
-    glued = [s.fixed for s in case.bodies.spheres] + [False] * len(case.bodies.clumps)
+    glued = [s.fixed for s in case.bodies.spheres] + [c.fixed for c in case.bodies.clumps]
     moving = float(sum(body.mass for body, fixed in zip(table, glued) if not fixed))
     # The first check: at `after`, or at the last wall removal if later (a release's trap opening).
     return RestChecks(every=every, after=after, first=max([after, *removals.values()]), speed=rest.speed, mass=moving,

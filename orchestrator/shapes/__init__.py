@@ -48,7 +48,7 @@ class BodyShape(Protocol):
 
     def surface_mesh(self, resolution: int = 24) -> tuple[np.ndarray, np.ndarray]: ...  # (n, 3) m, (m, 3) indices
 
-    def lowest_point(self, rotation: np.ndarray) -> float: ...  # m, lowest z about the centre
+    def lowest_points(self, rotations: np.ndarray) -> np.ndarray: ...  # (F,) m, lowest z about the centre per (F, 3, 3) rotation
 
 
 KINDS: dict[str, Any] = {

@@ -187,9 +187,9 @@ class BrickClump:
         offsets = (np.arange(self.n_spheres) * len(unit))[:, None, None]
         return vertices, (triangles[None, :, :] + offsets).reshape(-1, 3)
 
-    def lowest_point(self, rotation: np.ndarray) -> float:
-        """Lowest z (m) of the clump's spheres about its centre for the body turned by `rotation` (3, 3)."""
-        return float(((self.centres @ np.asarray(rotation).T)[:, 2] - self.radii).min())
+    def lowest_points(self, rotations: np.ndarray) -> np.ndarray:
+        """(F,) lowest z (m) of the clump's spheres about its centre, the body turned by each of `rotations` (F, 3, 3)."""
+        return (np.einsum("fj,sj->fs", np.asarray(rotations)[:, 2, :], self.centres) - self.radii[None, :]).min(axis=1)
 
     def surface_deviation(self, samples_per_edge: int = 40) -> tuple[float, float]:
         """(max, mean) distance from points on the brick's surface to the surface of the sphere union.

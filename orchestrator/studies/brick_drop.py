@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.shapes.clump import BrickClump, bodies_sphere_centres, quaternion_matrices
+from orchestrator.shapes import BodyShape
+from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
@@ -45,15 +46,20 @@ def reference() -> dict[str, Any]:
     return load_reference()["brick_drop"]["richefeu_code"]
 
 
-def study_brick(layout: tuple[int, int, int] | None = None, rounding: float | None = None, name: str = "brick") -> dict[str, Any]:
+def study_brick(layout: tuple[int, int, int] | None = None, rounding: float | None = None, name: str = "brick",
+                kind: str = "clump", blockiness: tuple[float, float] | None = None) -> dict[str, Any]:
     """A shape entry for the study's brick (31 × 15 × 8 mm) as the brick studies build it by default
     (BrickSpec: its layout and rounding unless given), with the mass and inertia of the study's
-    rounded brick (density 1700 kg/m³ × V, and I/m of the reference) whatever the clump."""
+    rounded brick (density 1700 kg/m³ × V, and I/m of the reference) whatever its representation
+    (`kind`: clump or superquadric, with `blockiness`)."""
     ref, default = reference(), BrickSpec()
     mass = default.density * ref["volume"]
-    return {"name": name, "length": default.length, "width": default.width, "thickness": default.thickness,
-            "layout": list(layout or default.layout), "rounding": default.rounding if rounding is None else rounding,
-            "mass": mass, "inertia": [mass * k for k in ref["inertia_over_mass"]]}
+    entry = {"name": name, "kind": kind, "length": default.length, "width": default.width, "thickness": default.thickness,
+             "layout": list(layout or default.layout), "rounding": default.rounding if rounding is None else rounding,
+             "mass": mass, "inertia": [mass * k for k in ref["inertia_over_mass"]]}
+    if blockiness is not None:
+        entry["blockiness"] = list(blockiness)
+    return entry
 
 
 def drop_case(engine: str, shape: dict[str, Any], constants: str, tilted: bool, duration: float | None = None) -> Case:
@@ -88,12 +94,11 @@ class Drop:
     reach: float
 
     @classmethod
-    def from_trajectory(cls, trajectory: Trajectory, clump: BrickClump) -> "Drop":
+    def from_trajectory(cls, trajectory: Trajectory, body: BodyShape) -> "Drop":
         rotation = quaternion_matrices(trajectory.orientation[:, 0])
-        spheres = bodies_sphere_centres(clump, trajectory.position[:, 0], rotation)
-        lowest = (spheres[:, :, 2] - clump.radii[None, :]).min(axis=1)
+        lowest = trajectory.position[:, 0, 2] + body.lowest_points(rotation)
         return cls(trajectory.time, trajectory.position[:, 0], trajectory.velocity[:, 0], trajectory.angular_velocity[:, 0], rotation, lowest,
-                   clump.bounding_radius)
+                   body.bounding_radius)
 
     def contacts(self) -> list[tuple[int, int]]:
         """(first, last) frame of each contact episode with the plate (lowest point below its top)."""
@@ -167,8 +172,8 @@ def measure_drop(engine: str, shape: dict[str, Any], constants: str, tilted: boo
     """Run one drop in `directory`: its metrics (flat_metrics or tilted_metrics) and its Drop."""
     case = drop_case(engine, shape, constants, tilted)
     run_case(case, directory, directory / RELEASE_DIR)
-    clump = case.shape(shape["name"]).clump(case.material("brick").density)
-    drop = Drop.from_trajectory(read_results(directory / RELEASE_DIR / RESULTS), clump)
+    body = case.shape(shape["name"]).body(case.material("brick").density)
+    drop = Drop.from_trajectory(read_results(directory / RELEASE_DIR / RESULTS), body)
     return (tilted_metrics(drop) if tilted else flat_metrics(drop)), drop
 
 

@@ -16,10 +16,10 @@ from orchestrator.post.lost import lost_bodies
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.options import RunOptions
-from orchestrator.engines.liggghts import deck, plugin
-from orchestrator.engines.liggghts.deck import (CHECKPOINT_EXT, CLUMP_COLUMNS, CONTACT_PAIRS_NAME, CONTACT_WALLS_NAME, DECK_NAME, DUMP_NAME, INSTALL_HINT,
-                                                SPHERE_COLUMNS, TEXT_DUMP_NAME)
-from orchestrator.engines.liggghts.dump import (binary_dump_steps, clump_states, contact_rows, read_binary_dump, read_dump, read_local_dump,
+from orchestrator.engines.liggghts import deck, plugin, superquadrics
+from orchestrator.engines.liggghts.deck import (CHECKPOINT_EXT, CONTACT_PAIRS_NAME, CONTACT_WALLS_NAME, DECK_NAME, DUMP_NAME, INSTALL_HINT,
+                                                TEXT_DUMP_NAME, dump_columns)
+from orchestrator.engines.liggghts.dump import (binary_dump_steps, clump_states, superquadric_states, contact_rows, read_binary_dump, read_dump, read_local_dump,
                                                 sphere_states)
 from orchestrator.engines import checkpoint
 from orchestrator.engines.checkpoint import segment_name
@@ -76,7 +76,8 @@ class LiggghtsAdapter(AdapterDefaults):
         return adapter
 
     def build_inputs(self) -> dict[str, str]:
-        return {**super().build_inputs(), "plugin": plugin.build_key()}
+        return {**super().build_inputs(), "plugin": plugin.build_key(),
+                "superquadric_build": plugin.build_key(plugin.SUPERQUADRIC_SOURCES)}
 
     def law_plugin(self, force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
         """The compiled bilinear law (capability `compiled_law`), built once and cached outside the clone."""
@@ -98,8 +99,10 @@ class LiggghtsAdapter(AdapterDefaults):
         return deck.write_deck(plan, rundir, self.processor_grid, self.max_bins, self.skin_radii, self.checkpoint_steps(plan))
 
     # -- run -------------------------------------------------------------------------------
-    def command(self, deck: Path) -> list[str]:
-        executable = require_executable(self.executable, INSTALL_HINT)
+    def command(self, deck: Path, executable: str | None = None) -> list[str]:
+        """The engine's command line for `deck`; `executable` instead of the adapter's own when given
+        (the source-built LIGGGHTS for superquadric bodies)."""
+        executable = executable or require_executable(self.executable, INSTALL_HINT)
         base = [executable, "-echo", "screen", "-in", deck.name]  # echo: the log shows the failing command
         # LIGGGHTS prints its ERROR line and then calls MPI_Abort: with a block-buffered pipe the
         # message is lost. Line buffering (stdbuf, coreutils) keeps it in the log.
@@ -121,10 +124,13 @@ class LiggghtsAdapter(AdapterDefaults):
         watcher = ThermoWatcher(dt, lambda step: (checkpoint.seal(rundir, CHECKPOINT_EXT, min(step, total - 1)),
                                                   checkpoint.prune(rundir, CHECKPOINT_EXT)))
         env = dict(os.environ)
-        if case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
+        executable = None
+        if superquadrics.is_superquadric_case(case):  # Debian's build has no superquadrics: the source-built one
+            executable = str(plugin.ensure_superquadric_liggghts())
+        elif case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
             env.update(plugin.liggghts_env(plugin.ensure_plugin()))
         try:
-            tail = run_engine(self.command(deck), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout,
+            tail = run_engine(self.command(deck, executable), rundir, deck, watcher, total * dt, progress, env=env, timeout=timeout,
                               log_name=log.name)
         except EngineError as error:  # LIGGGHTS stops once its box is empty (write_restart): the bodies that left are the cause
             raise self._lost_instead(plan, rundir, error) from None
@@ -147,7 +153,7 @@ class LiggghtsAdapter(AdapterDefaults):
         deck = rundir / DECK_NAME
         dt = plan.schedule.dt
         if (rundir / DUMP_NAME).exists():
-            columns = list(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS)
+            columns = list(dump_columns(case))
             steps, frames = checkpoint.merge([read_binary_dump(path, len(columns)) for path in checkpoint.segment_files(rundir, DUMP_NAME)])
         else:
             steps, columns, frames = read_dump(rundir / TEXT_DUMP_NAME)
@@ -157,6 +163,11 @@ class LiggghtsAdapter(AdapterDefaults):
         if "id_multisphere" in column:
             position, velocity, spin, orientation, atom_slot = clump_states(case, column, frames)
             ids = np.arange(1, len(case.bodies.clumps) + 1)
+        elif "quat1" in column:  # superquadrics: one atom per body, atom id = body index + 1
+            ids = np.arange(1, len(case.bodies.clumps) + 1)
+            position, velocity, spin, orientation = superquadric_states(ids, column, frames)
+            atom_slot = np.full(len(ids) + 1, -1, dtype=np.int64)
+            atom_slot[ids] = np.arange(len(ids))
         else:
             ids = frames[0][:, 0].astype(np.int64)
             position, velocity, spin = sphere_states(ids, column, frames)
@@ -174,7 +185,7 @@ class LiggghtsAdapter(AdapterDefaults):
             velocity=velocity,
             angular_velocity=spin,
             orientation=orientation,
-            attrs={"orientation_tracked": "id_multisphere" in column, **common.at_rest_attrs(rundir, dt)},
+            attrs={"orientation_tracked": "id_multisphere" in column or "quat1" in column, **common.at_rest_attrs(rundir, dt)},
             contacts=self.read_contacts(plan, rundir, steps, atom_slot) if case.record_contacts else None,
         )
 
@@ -197,7 +208,7 @@ class LiggghtsAdapter(AdapterDefaults):
         return [(step, path) for step, path in super().usable_checkpoints(plan, rundir) if step not in removals]
 
     def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
-        columns = len(CLUMP_COLUMNS if plan.case.bodies.clumps else SPHERE_COLUMNS)
+        columns = len(dump_columns(plan.case))
         pieces = [binary_dump_steps(path, columns) for path in checkpoint.segment_files(rundir, DUMP_NAME)]
         steps, _ = checkpoint.merge([(piece, piece) for piece in pieces])
         return steps[-1] if steps else None

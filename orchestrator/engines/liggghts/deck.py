@@ -12,6 +12,7 @@ from orchestrator import geometry
 from orchestrator.case import Case, Domain
 from orchestrator.engines import common
 from orchestrator.engines.checkpoint import segment_name
+from orchestrator.engines.liggghts import superquadrics
 from orchestrator.plan import RunPlan
 from orchestrator.engines.templating import render
 
@@ -79,8 +80,9 @@ def primes_above(start: int, count: int) -> list[int]:
 
 
 def _sphere_radii(case: Case) -> list[float]:
+    """The radius of every particle LIGGGHTS meets: spheres, clump spheres, superquadrics' bounding spheres."""
     radii = [s.radius for s in case.bodies.spheres]
-    radii += [case.shape(c.shape).clump(case.material(c.material).density).radius for c in case.bodies.clumps]
+    radii += [case.shape(c.shape).body(case.material(c.material).density).radius for c in case.bodies.clumps]
     return radii
 
 
@@ -107,17 +109,17 @@ def _numbers(values: object) -> str:
 
 
 def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
-    """Template data for clumps: multisphere templates per (shape, material) and one insertion per clump."""
-    if not case.bodies.clumps:
+    """Template data for clumps: multisphere templates per (shape, material, glued) and one insertion per clump."""
+    if not case.bodies.clumps or superquadrics.is_superquadric_case(case):
         return {"clump_templates": [], "clumps": [], "placement_radius": PLACEMENT_RADIUS}
-    kinds = sorted({(c.shape, c.material) for c in case.bodies.clumps})
+    kinds = sorted({(c.shape, c.material, c.fixed) for c in case.bodies.clumps})
     seeds = primes_above(10000 + case.seed % 100000, 2 * len(kinds) + len(case.bodies.clumps))
     templates = {}
-    for index, (shape_name, material) in enumerate(kinds):
+    for index, (shape_name, material, glued) in enumerate(kinds):
         brick = case.shape(shape_name).clump(case.material(material).density)
         spheres = " ".join(f"{_numbers(c)} {float(r)!r}" for c, r in zip(brick.centres, brick.radii))
         tensor = brick.inertia_tensor
-        templates[(shape_name, material)] = {
+        templates[(shape_name, material, glued)] = {
             "template": f"template_{index + 1}",
             "distribution": f"distribution_{index + 1}",
             "seed": seeds[2 * index],
@@ -129,6 +131,8 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
             "multisphere_type": index + 1,
             "mass": brick.mass,
             "inertia": _numbers(tensor[i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))),
+            # A glued clump: fix multisphere neither moves nor turns it (its forces and torques are not integrated).
+            "flags": " fflag off off off tflag off off off" if glued else "",
         }
     clumps = [
         {
@@ -136,7 +140,7 @@ def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
             "orientation": _numbers(c.orientation),
             "velocity": _numbers(c.velocity),
             "angular_velocity": _numbers(c.angular_velocity),
-            "distribution": templates[(c.shape, c.material)]["distribution"],
+            "distribution": templates[(c.shape, c.material, c.fixed)]["distribution"],
             "seed": seeds[2 * len(kinds) + i],
         }
         for i, c in enumerate(case.bodies.clumps)
@@ -207,8 +211,6 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
     gravity = np.asarray(case.gravity, dtype=float)
     magnitude = float(np.linalg.norm(gravity))
     direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
-    fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
-    glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
     segments = run_segments(plan, start)
     segment = plan.segment
     radius_max = float(max(_sphere_radii(case)))
@@ -222,7 +224,6 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
         "law": case.law.value,
         "data_file": DATA_NAME,
         "dump_file": segment_name(DUMP_NAME, segment),
-        "dump_columns": " ".join(CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS),
         "contacts": {"pairs": segment_name(CONTACT_PAIRS_NAME, segment), "walls": segment_name(CONTACT_WALLS_NAME, segment)}
                     if case.record_contacts else None,
         "checkpoint_every": checkpoint_every,
@@ -235,10 +236,8 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
         "gravity_magnitude": magnitude,
         "gravity_direction": [float(v) for v in direction],
         "walls": walls,
-        "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
-        "glued_ids": id_ranges(glued) if glued else "",
         "planar": case.planar,
-        **clump_context(case, types),
+        **body_context(case, types, starts_from_state=bool(resume or case.initial_state)),
         "output_every": plan.schedule.output_every,
         "thermo_every": max(1, min(plan.schedule.output_every, plan.schedule.total_steps // 100)),
         "total_steps": plan.schedule.total_steps,
@@ -251,6 +250,35 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
     deck = rundir / segment_name(DECK_NAME, segment)
     deck.write_text(render("liggghts", "case.in.j2", context))
     return deck
+
+
+def body_context(case: Case, types: dict[str, int], starts_from_state: bool) -> dict[str, object]:
+    """Template data for the bodies: atom style, dump columns, glued and non-rotating ids, clump
+    templates or superquadric settings (none when the bodies come from a state file)."""
+    superquadric = superquadrics.is_superquadric_case(case)
+    if superquadric:
+        glued = [i + 1 for i, c in enumerate(case.bodies.clumps) if c.fixed]
+        fixed = []
+    else:
+        glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
+        fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
+    return {
+        "dump_columns": " ".join(dump_columns(case)),
+        "atom_style": "superquadric" if superquadric else "granular",
+        "surface": " surface superquadric" if superquadric else "",
+        "superquadric": superquadric,
+        "superquadric_sets": superquadrics.set_commands(case) if superquadric and not starts_from_state else [],
+        "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
+        "glued_ids": id_ranges(glued) if glued else "",
+        **clump_context(case, types),
+    }
+
+
+def dump_columns(case: Case) -> tuple[str, ...]:
+    """The frame dump's columns: per sphere, per clump sphere (with its body id) or per superquadric (with its orientation)."""
+    if superquadrics.is_superquadric_case(case):
+        return superquadrics.SUPERQUADRIC_COLUMNS
+    return CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS
 
 
 def write_meshes(plan: RunPlan, types: dict[str, int], rundir: Path, present: list[str]) -> list[dict[str, object]]:
@@ -267,19 +295,25 @@ def write_meshes(plan: RunPlan, types: dict[str, int], rundir: Path, present: li
 
 
 def write_data(plan: RunPlan, types: dict[str, int], path: Path) -> None:
-    """LIGGGHTS data file (atom_style granular): Atoms `id type diameter density x y z`, then Velocities."""
+    """LIGGGHTS data file (atom_style granular): Atoms `id type diameter density x y z`, then Velocities;
+    or, for superquadric bodies, their rows (superquadrics.atom_rows)."""
     case = plan.case
     lower, upper = plan.domain.lower, plan.domain.upper
+    superquadric = superquadrics.is_superquadric_case(case)
     lines = [
         f"LIGGGHTS data file written by dem-orchestrator for case {case.name}",
         "",
-        f"{len(case.bodies.spheres)} atoms",
+        f"{len(case.bodies.clumps) if superquadric else len(case.bodies.spheres)} atoms",
         f"{len(types)} atom types",
         "",
         f"{lower[0]!r} {upper[0]!r} xlo xhi",
         f"{lower[1]!r} {upper[1]!r} ylo yhi",
         f"{lower[2]!r} {upper[2]!r} zlo zhi",
     ]
+    if superquadric:
+        lines += ["", "Atoms", "", *superquadrics.atom_rows(case, types), "", "Velocities", "", *superquadrics.velocity_rows(case)]
+        path.write_text("\n".join(lines) + "\n")
+        return
     if not case.bodies.spheres:  # clumps only: they are inserted by the deck
         path.write_text("\n".join(lines) + "\n")
         return

@@ -24,6 +24,18 @@ def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarr
     return position, velocity, spin
 
 
+def superquadric_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(F, B, 3) position, velocity, spin and (F, B, 4) orientation (w, x, y, z) of superquadric
+    bodies (one atom each, columns quat1..quat4); a lost body is NaN from then on."""
+    position, velocity, spin = sphere_states(ids, column, frames)
+    orientation = np.full(position.shape[:2] + (4,), np.nan)
+    index_of = {int(i): k for k, i in enumerate(ids)}
+    for f, rows in enumerate(frames):
+        slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
+        orientation[f, slots] = rows[:, column["quat1"] : column["quat4"] + 1]
+    return position, velocity, spin, orientation
+
+
 def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once:
     position, velocity, spin, orientation, and atom id → body index (the clump's place in the case).

@@ -1,8 +1,13 @@
-"""Build and cache the LIGGGHTS bilinear contact plugin (custom_contact/), outside the clone.
+"""Build and cache what the project compiles for LIGGGHTS (custom_contact/), outside the clone:
 
-Cache: ${DEMORCH_CACHE:-${XDG_CACHE_HOME:-~/.cache}/dem-orchestrator}/contact/<key>/, key = sha256 of
-the C++ sources, the build script and the installed liggghts package version. A build happens in a
-temporary directory renamed into place, so a crashed build never leaves a half-made cache entry.
+- the bilinear contact plugin, loaded into Debian's `liggghts` (clumps and spheres);
+- a LIGGGHTS executable built from Debian's own source of the installed version with superquadric
+  particles and the bilinear law compiled in (superquadric bricks: Debian's build has none).
+
+Cache: ${DEMORCH_CACHE:-${XDG_CACHE_HOME:-~/.cache}/dem-orchestrator}/contact/<key>/ and
+…/liggghts-superquadric/<key>/, key = sha256 of the sources, the build script and the installed
+liggghts package version. A build happens in a temporary directory renamed into place, so a
+crashed build never leaves a half-made cache entry.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ from typing import Callable
 SOURCE_DIR = Path(__file__).resolve().parents[3] / "custom_contact"
 SOURCES = ("normal_model_bilinear.h", "plugin.cpp", "build.sh")
 LIBRARY = "libdemorch_bilinear.so"
+SUPERQUADRIC_SOURCES = ("normal_model_bilinear.h", "build_liggghts.sh")
+SUPERQUADRIC_EXECUTABLE = "liggghts"
 
 
 from orchestrator.engines.base import ContactBuildError
@@ -39,39 +46,55 @@ def engine_version() -> str:
     return result.stdout.strip() or "unknown"
 
 
-def source_hash() -> str:
+def source_hash(sources: tuple[str, ...] = SOURCES) -> str:
     digest = hashlib.sha256()
-    for name in SOURCES:
+    for name in sources:
         digest.update(name.encode())
         digest.update((SOURCE_DIR / name).read_bytes())
     return digest.hexdigest()
 
 
-def build_key() -> str:
-    return hashlib.sha256(f"{source_hash()}|{engine_version()}".encode()).hexdigest()[:16]
+def build_key(sources: tuple[str, ...] = SOURCES) -> str:
+    return hashlib.sha256(f"{source_hash(sources)}|{engine_version()}".encode()).hexdigest()[:16]
 
 
 def plugin_path() -> Path:
     return cache_root() / "contact" / build_key() / LIBRARY
 
 
+def superquadric_executable_path() -> Path:
+    return cache_root() / "liggghts-superquadric" / build_key(SUPERQUADRIC_SOURCES) / SUPERQUADRIC_EXECUTABLE
+
+
 def ensure_plugin(force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
     """Path of the built plugin, building it first when the cache has none for this source and engine."""
-    target = plugin_path()
+    return _ensure_built(plugin_path(), "build.sh", (), "the bilinear contact plugin",
+                         "apt-get install libliggghts-dev mpi-default-dev g++", force, progress)
+
+
+def ensure_superquadric_liggghts(force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
+    """Path of the LIGGGHTS executable with superquadrics and the bilinear law, building it first
+    (about 6 min on 2 cores, once) when the cache has none for this source and engine version."""
+    downloads = cache_root() / "liggghts-source"
+    return _ensure_built(superquadric_executable_path(), "build_liggghts.sh", (str(downloads),),
+                         "LIGGGHTS with superquadrics (from Debian's source)",
+                         "a deb-src entry (scripts/setup.sh adds it), cmake, g++, mpi-default-dev", force, progress)
+
+
+def _ensure_built(target: Path, script: str, arguments: tuple[str, ...], what: str, needs: str,
+                  force: bool, progress: Callable[[str], None] | None) -> Path:
     if target.exists() and not force:
         return target
     final_dir = target.parent
     final_dir.parent.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     if progress:
-        progress(f"building the bilinear contact plugin into {final_dir} ...")
+        progress(f"building {what} into {final_dir} ...")
     with tempfile.TemporaryDirectory(dir=final_dir.parent, prefix=".build-") as scratch:
-        result = subprocess.run(["bash", str(SOURCE_DIR / "build.sh"), scratch], capture_output=True, text=True)
-        if result.returncode != 0 or not (Path(scratch) / LIBRARY).exists():
+        result = subprocess.run(["bash", str(SOURCE_DIR / script), scratch, *arguments], capture_output=True, text=True)
+        if result.returncode != 0 or not (Path(scratch) / target.name).exists():
             tail = "\n".join((result.stdout + result.stderr).strip().splitlines()[-25:])
-            raise ContactBuildError(
-                "building the bilinear contact plugin failed (needs: apt-get install libliggghts-dev mpi-default-dev g++):\n" + tail
-            )
+            raise ContactBuildError(f"building {what} failed (needs: {needs}):\n" + tail)
         (Path(scratch) / "build.log").write_text(result.stdout + result.stderr)
         if final_dir.exists():
             shutil.rmtree(final_dir)

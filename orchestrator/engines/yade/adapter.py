@@ -142,13 +142,13 @@ class YadeAdapter(AdapterDefaults):
 
 def _clumps(case: Case) -> list[tuple]:
     """The script's CLUMPS rows: material, sphere centres (world) and radii, centre, orientation,
-    velocity, spin, true mass and principal inertia."""
+    velocity, spin, true mass and principal inertia, glued."""
     rows = []
     for c in case.bodies.clumps:
         brick = case.shape(c.shape).clump(case.material(c.material).density)
         centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
         rows.append((c.material, [tuple(float(v) for v in p) for p in centres], [float(r) for r in brick.radii], c.position, c.orientation,
-                     c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia)))
+                     c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia), c.fixed))
     return rows
 
 

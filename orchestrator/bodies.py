@@ -1,0 +1,115 @@
+"""The bodies of a case: spheres, brick shapes (of any kind, orchestrator/shapes) and the bodies made of them."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from orchestrator.fields import AngularVelocity, Name, Position, QuaternionPart, Real, Strict, Velocity
+from orchestrator.shapes import KINDS, BodyShape, make_shape
+from orchestrator.shapes.clump import BrickClump
+
+
+class Sphere(Strict):
+    material: Name
+    radius: Real(unit="m", ge=1e-6, le=10.0)  # from a micron: a smaller body's mass and inertia underflow in the engines
+    position: Position
+    velocity: Velocity = (0.0, 0.0, 0.0)
+    angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
+    # A sphere that cannot rotate slides like a block: the sliding-friction check needs it.
+    fixed_rotation: bool = False
+    # Glued: the sphere never moves (it still touches others). The rough bed of a collapse channel.
+    fixed: bool = False
+
+
+ShapeKind = Literal[tuple(KINDS)]  # type: ignore[valid-type]
+
+
+class BrickShape(Strict):
+    """A brick (box) of length × width × thickness, realised as `kind` (orchestrator/shapes):
+    `clump`, a clump of layout[0] × layout[1] × layout[2] spheres (see shapes/clump.py), or
+    `superquadric`, one body with flat faces and rounded edges of the given blockiness (see
+    shapes/superquadric.py). Either way the body has the true brick's mass and inertia.
+
+    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; clumps only).
+    """
+
+    name: Name
+    kind: ShapeKind = "clump"
+    length: Real(unit="m", gt=0.0, le=10.0)
+    width: Real(unit="m", gt=0.0, le=10.0)
+    thickness: Real(unit="m", gt=0.0, le=10.0)
+    layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
+    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0
+    # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
+    # thickness axes) when given; default: those of the (rounded) box at the material's density.
+    mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
+    inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
+    # Edges and corners rounded at this radius (m): eight corner spheres join the layout (shapes/clump.py).
+    # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
+    rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
+    # Superquadric only: the exponents (n1 across the thickness, n2 in the length-width plane); 2 is
+    # an ellipsoid, larger is blockier (flatter faces, sharper edges, a costlier contact search).
+    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (16.0, 16.0)
+
+    @model_validator(mode="after")
+    def _physical_inertia(self) -> "BrickShape":
+        if self.kind != "clump" and self.bevel_deg:
+            raise ValueError(f"bevel_deg: a {self.kind} brick has no bevelled faces; allowed: 0, or kind: clump (got {self.bevel_deg!r})")
+        limit = min(self.length, self.width, self.thickness) / 2.0
+        if self.rounding and (self.bevel_deg or self.rounding >= limit):
+            raise ValueError(f"rounding: needs bevel_deg 0; allowed range: [0, {limit:g}) (got {self.rounding!r})")
+        if self.inertia is not None:
+            a, b, c = sorted(self.inertia)
+            if c > a + b:
+                raise ValueError(f"inertia: no solid has these principal moments (the largest, {c!r}, exceeds the sum of the other two)")
+        return self
+
+    def body(self, density: float) -> BodyShape:
+        """The body shape (mass, inertia, extent, surface…) at the material's density (kg/m³)."""
+        return make_shape(self, density)
+
+    def clump(self, density: float) -> BrickClump:
+        """The body as a clump of spheres; ValueError for another kind (engine code that needs spheres)."""
+        body = self.body(density)
+        if not isinstance(body, BrickClump):
+            raise ValueError(f"shapes.{self.name}: a {self.kind} brick has no spheres")
+        return body
+
+
+class Clump(Strict):
+    """A rigid body of one of the case's shapes (a clump of spheres or a superquadric), with the
+    shape's true mass and inertia."""
+
+    shape: Name
+    material: Name
+    position: Position
+    orientation: tuple[QuaternionPart, QuaternionPart, QuaternionPart, QuaternionPart] = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
+    velocity: Velocity = (0.0, 0.0, 0.0)
+    angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
+    # Glued: the body never moves (it still touches others), e.g. the lower brick of a sliding test.
+    fixed: bool = False
+
+    @field_validator("orientation")
+    def _unit_quaternion(cls, value: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        """Normalised, but kept to the bit when already unit (to 1e-12): renormalising moves last bits, so a
+        case read back from case.json would hash to another run id and a finished run never be reused."""
+        norm = math.hypot(*value)  # no overflow: (1e200, 0, 0, 0) is the identity, not zeros
+        if norm < 1e-9:
+            raise ValueError("must be a non-zero quaternion (w, x, y, z)")
+        return value if abs(norm - 1.0) <= 1e-12 else tuple(v / norm for v in value)  # type: ignore[return-value]
+
+
+class Bodies(Strict):
+    """Spheres (ids first, in order) then clumps (in order): body i in results.h5 is the i-th here."""
+
+    spheres: Annotated[list[Sphere], Field(max_length=2_000_000)] = []
+    clumps: Annotated[list[Clump], Field(max_length=200_000)] = []
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> "Bodies":
+        if not self.spheres and not self.clumps:
+            raise ValueError("give at least one body (spheres or clumps)")
+        return self
