@@ -80,11 +80,15 @@ class LiggghtsAdapter(AdapterDefaults):
                 "superquadric_build": plugin.build_key(plugin.SUPERQUADRIC_SOURCES)}
 
     def law_plugin(self, force: bool = False, progress: Callable[[str], None] | None = None) -> Path:
-        """The compiled bilinear law (capability `compiled_law`), built once and cached outside the clone."""
-        return plugin.ensure_plugin(force=force, progress=progress)
+        """The compiled bilinear law (capability `compiled_law`), built once and cached outside the
+        clone; and the source-built executable that superquadric bodies run on (same cache)."""
+        path = plugin.ensure_plugin(force=force, progress=progress)
+        plugin.ensure_superquadric_liggghts(force=force, progress=progress)
+        return path
 
     def law_plugin_status(self) -> dict[str, object]:
-        return plugin.plugin_status()
+        return {**plugin.plugin_status(), "superquadric_executable": str(plugin.superquadric_executable_path()),
+                "superquadric_built": plugin.superquadric_executable_path().exists()}
 
     def info(self) -> EngineInfo:
         return EngineInfo(
