@@ -42,6 +42,8 @@ from orchestrator.engines import get_adapter
 from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
 
 LOCK = ".lock"
+JOBS = "jobs"  # a batch scheduler's files for the run (job script, job logs, job record: orchestrator.slurm)
+KEPT = (LOCK, JOBS)  # what stays in the directory when an attempt is retired: they belong to the directory, not to one attempt
 ATTIC = "attic"
 STATUSES = ("pending", "running", "completed", "failed", "stale", "incomplete")
 
@@ -202,7 +204,7 @@ def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: b
     """
     if not held and is_locked(directory):
         return "running"
-    if not directory.exists() or not any(p.name != LOCK for p in directory.iterdir()):
+    if not holds_attempt(directory):
         return "pending"
     record = read_json(directory / RUN_RECORD)
     if record is None:
@@ -229,13 +231,18 @@ def current(directory: Path, record: dict[str, Any], inputs_model: type[BaseMode
     return not check_build or build == build_stamp(str(build.get("engine", "")))
 
 
+def holds_attempt(directory: Path) -> bool:
+    """Whether the directory holds anything an attempt left (more than what is KEPT)."""
+    return directory.exists() and any(entry.name not in KEPT for entry in directory.iterdir())
+
+
 def retire(directory: Path, root: Path) -> Path:
     """Move what a dead, failed or stale attempt left to root/attic/<name>-<time> (nothing computed is
-    deleted), so the directory can run again. The lock file stays: call it under the lock."""
+    deleted), so the directory can run again. The lock file and the jobs (KEPT) stay: call it under the lock."""
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
     target = root / ATTIC / f"{directory.name}-{stamp}"
     target.mkdir(parents=True)
     for entry in directory.iterdir():
-        if entry.name != LOCK:
+        if entry.name not in KEPT:
             shutil.move(str(entry), target / entry.name)
     return target

@@ -206,7 +206,7 @@ def ensure_run(
         if rundir.status(directory, held=True) == "completed" and (required is None or required.is_file()):
             return directory, True
         plan = make_plan(case, root)
-        if any(entry.name != rundir.LOCK for entry in directory.iterdir()) and resume_point(plan, directory) is None:
+        if rundir.holds_attempt(directory) and resume_point(plan, directory) is None:
             rundir.retire(directory, root)
         try:
             run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)

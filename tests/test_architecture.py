@@ -30,7 +30,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("orchestrator.rundir",),
     ("orchestrator.runner",),
     ("orchestrator.studies", "orchestrator.parity"),
-    ("orchestrator.campaign",),
+    ("orchestrator.campaign", "orchestrator.slurm"),
     ("orchestrator.cli",),
 ]
 

@@ -57,7 +57,7 @@ def test_good_case_files_load() -> None:
     "command",
     [["run"], ["render"], ["post"], ["doctor"], ["build-contact"], ["demo"], ["avalanche"],
      ["campaign", "run"], ["campaign", "status"], ["campaign", "table"], ["campaign", "plot"], ["campaign", "calibrate"],
-     ["collapse", "run"], ["collapse", "calibrate"], ["collapse", "plot"]],
+     ["collapse", "run"], ["collapse", "calibrate"], ["collapse", "plot"], ["submit"], ["status"], ["slurm-job"]],
     ids=" ".join,
 )
 def test_every_documented_command_exists(command: list[str]) -> None:

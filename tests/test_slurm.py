@@ -36,3 +36,9 @@ def test_a_bad_walltime_is_one_line_naming_the_option(walltime: str) -> None:
         SlurmJobs(walltime, jobs=1).seconds()
     result = CliRunner().invoke(main, ["campaign", "slurm", "campaigns/collapse/study22_reduced.yaml", "--walltime", walltime, "--jobs", "1", "--dry-run"])
     assert result.exit_code == 2 and "--walltime" in result.output
+
+
+def test_a_partition_that_is_not_a_plain_name_is_refused_before_any_job_script() -> None:
+    result = CliRunner().invoke(main, ["campaign", "slurm", "campaigns/collapse/study22_reduced.yaml", "--walltime", "01:00:00", "--jobs", "1",
+                                       "--partition", "x; rm -rf /", "--dry-run"])
+    assert result.exit_code == 2 and "--partition" in result.output and "#SBATCH" not in result.output

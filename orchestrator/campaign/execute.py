@@ -52,7 +52,7 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
             plan = _case_plan(point_json, Path(case_dir)) if kind == "case" else None
-            if any(entry.name != rundir.LOCK for entry in path.iterdir()) and not _continues(path, Path(case_dir), kind, plan):
+            if rundir.holds_attempt(path) and not _continues(path, Path(case_dir), kind, plan):
                 rundir.retire(path, path.parent.parent)
             return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options, plan)
     except rundir.Busy:

@@ -12,15 +12,11 @@ scheduler runs in the process that calls start_cluster (the login node, say).
 
 from __future__ import annotations
 
-import re
 import sys
 from dataclasses import dataclass
 from typing import Any
 
-from orchestrator.case import CaseError
-
-_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,2}):(\d{2}):(\d{2})$")
-MIN_WALLTIME_S = 600  # a job shorter than 10 min would spend most of it starting and checkpointing
+from orchestrator.slurm.values import check_name, margin_seconds, walltime_seconds
 
 
 @dataclass(frozen=True)
@@ -46,19 +42,19 @@ class SlurmJobs:
 
     def seconds(self) -> int:
         """The wall-time limit in seconds; CaseError naming --walltime if malformed or too short."""
-        match = _WALLTIME.match(self.walltime)
-        if not match:
-            raise CaseError(f"--walltime={self.walltime!r}: must be [D-]HH:MM:SS, e.g. 01:00:00")
-        days, hours, minutes, seconds = (int(part or 0) for part in match.groups())
-        total = ((days * 24 + hours) * 60 + minutes) * 60 + seconds
-        if total < MIN_WALLTIME_S:
-            raise CaseError(f"--walltime={self.walltime!r}: allowed range: at least 00:10:00")
-        return total
+        return walltime_seconds(self.walltime, "--walltime")
+
+    def check(self) -> None:
+        """CaseError naming the option when the wall time, partition or account would not go into a job script as it is."""
+        self.seconds()
+        for option, value in (("--partition", self.partition), ("--account", self.account)):
+            if value is not None:
+                check_name(value, option)
 
     def margin(self) -> int:
         """Seconds before the limit at which a worker retires: 5 % of the wall time, at least 2 min
         (time for the engine to be stopped and the job to end cleanly)."""
-        return max(120, self.seconds() // 20)
+        return margin_seconds(self.seconds())
 
     def cluster_options(self, environment: str = sys.prefix) -> dict[str, Any]:
         """Keyword arguments of dask_jobqueue.SLURMCluster; `environment`: the virtual environment

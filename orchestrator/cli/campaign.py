@@ -54,7 +54,7 @@ def campaign_slurm(context: click.Context, campaign_file: Path, output: Path | N
 
     spec = SlurmJobs(walltime, jobs, processes, memory, partition, account, directives, run_options().checkpoint_interval, max_cuts)
     try:
-        spec.seconds()
+        spec.check()
     except CaseError as error:
         fail(str(error))
     if dry_run:

@@ -1,7 +1,8 @@
 """`demorch`: render decks, run cases, check the installation, summarise results.
 
 One module per command group: main (this: run, render, post, doctor, brick, build-contact),
-avalanche (avalanche, demo), campaign, collapse; common holds what they share.
+avalanche (avalanche, demo), campaign, collapse, submit (submit, status, slurm-job: SLURM); common
+holds what they share.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
 from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
+from orchestrator.cli.submit import slurm_job, status, submit
 from orchestrator.cli.common import (DAMAGE, EXIT_DAMAGED, EXIT_ENGINE, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, errors, default_rundir, fail,
                                      metrics_table, progress_callback, run_options, warn, writable_rundir)
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
@@ -253,7 +255,7 @@ def build_contact(force: bool) -> None:
         console.print_json(json.dumps(adapter.law_plugin_status(), default=str))
 
 
-for command in (avalanche, demo, campaign, collapse, parity, validation, schema_command):
+for command in (avalanche, demo, campaign, collapse, parity, validation, schema_command, submit, status, slurm_job):
     main.add_command(command)
 
 
