@@ -52,7 +52,7 @@ class BrickShape(Strict):
     rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
     # Superquadric only: the exponents (n1 across the thickness, n2 in the length-width plane); 2 is
     # an ellipsoid, larger is blockier (flatter faces, sharper edges, a costlier contact search).
-    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (16.0, 16.0)
+    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
 
     @model_validator(mode="after")
     def _physical_inertia(self) -> "BrickShape":

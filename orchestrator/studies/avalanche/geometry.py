@@ -16,7 +16,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
-from orchestrator.shapes.clump import BrickClump, quaternion_matrices
+from orchestrator.shapes import BodyShape
+from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.studies.avalanche.packing import random_orientations
 
 
@@ -90,7 +91,7 @@ def _rectangle(name: str, material: str, origin: object, edge1: object, edge2: o
     }
 
 
-def rain_positions(geometry: AvalancheGeometry, brick: BrickClump, count: int, seed: int, gap: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
+def rain_positions(geometry: AvalancheGeometry, brick: BodyShape, count: int, seed: int, gap: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
     """Randomly oriented bricks on a grid inside the box footprint, stacked along the slope normal.
 
     Cells are one bounding diameter wide, so no two bricks overlap whatever their orientation.
@@ -105,19 +106,19 @@ def rain_positions(geometry: AvalancheGeometry, brick: BrickClump, count: int, s
     return geometry.box_to_world(local), random_orientations(count, seed)
 
 
-def rain_height(geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.001) -> float:
+def rain_height(geometry: AvalancheGeometry, brick: BodyShape, count: int, gap: float = 0.001) -> float:
     """Height above the box floor (along the normal) that the rain grid of `count` bricks reaches."""
     cell = 2.0 * brick.bounding_radius + gap
     per_layer = max(1, int(geometry.box_depth // cell)) * max(1, int(geometry.box_width // cell))
     return math.ceil(count / per_layer) * cell + 2 * gap
 
 
-def brick_count(volume: float, apparent_density: float, brick: BrickClump) -> int:
+def brick_count(volume: float, apparent_density: float, brick: BodyShape) -> int:
     """Bricks in a volume of pile at an apparent density (e.g. 40 l at 1000 kg/m³ → ≈ 6300 bricks)."""
     return int(round(volume * apparent_density / brick.mass))
 
 
-def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orientations: np.ndarray, brick: BrickClump,
+def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orientations: np.ndarray, brick: BodyShape,
                      spacing: float | None = None) -> float:
     """Total brick mass over the bulk volume it fills in the box (kg/m³): the volume between the box
     floor and the pile's levelled top surface.
@@ -144,7 +145,7 @@ def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orienta
     return len(positions) * brick.mass / (geometry.box_depth * geometry.box_width * float(level.mean()))
 
 
-def top_surface(depth: float, width: float, spacing: float, centres: np.ndarray, rotations: np.ndarray, brick: BrickClump) -> np.ndarray:
+def top_surface(depth: float, width: float, spacing: float, centres: np.ndarray, rotations: np.ndarray, brick: BodyShape) -> np.ndarray:
     """(nu, nv) heights (m) of the highest brick point above each point of a grid of `spacing` over
     [0, depth] × [0, width]: a vertical line through the point meets a brick's box (half extents e)
     where its slabs overlap (Kay & Kajiya's slab test); the top is where the line leaves the box.
@@ -172,7 +173,7 @@ def top_surface(depth: float, width: float, spacing: float, centres: np.ndarray,
 
 
 def ordered_pile(
-    geometry: AvalancheGeometry, brick: BrickClump, count: int, gap: float = 0.0005, flip_seed: int | None = None
+    geometry: AvalancheGeometry, brick: BodyShape, count: int, gap: float = 0.0005, flip_seed: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bricks in regular rows: length along the slope, width across, thickness normal; layers upward.
 
@@ -197,7 +198,7 @@ def ordered_pile(
     return positions, np.stack([w, x, y, z], axis=1)
 
 
-def pile_rows(geometry: AvalancheGeometry, brick: BrickClump, gap: float) -> tuple[int, int]:
+def pile_rows(geometry: AvalancheGeometry, brick: BodyShape, gap: float) -> tuple[int, int]:
     """Bricks along the slope and across in one layer of the ordered pile."""
     cell = brick.extent + gap
     return max(1, int(geometry.box_depth // cell[0])), max(1, int(geometry.box_width // cell[1]))

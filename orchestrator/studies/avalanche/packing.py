@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from orchestrator.shapes.clump import BrickClump
+from orchestrator.shapes import BodyShape
 
 
 def random_orientations(count: int, seed: int) -> np.ndarray:
@@ -20,7 +20,7 @@ def random_orientations(count: int, seed: int) -> np.ndarray:
 
 
 def loose_grid(
-    brick: BrickClump,
+    brick: BodyShape,
     count: int,
     lower: tuple[float, float, float],
     columns: tuple[int, int],

@@ -14,7 +14,8 @@ from typing import Any
 import meshio
 import numpy as np
 
-from orchestrator.shapes.clump import BrickClump, bodies_sphere_centres, quaternion_matrices
+from orchestrator.shapes import BodyShape
+from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains
@@ -94,7 +95,7 @@ def packing_verdict(value: float, target: float, floor: float) -> str:
 FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
 
 
-def plot_deposit(trajectory: Trajectory, brick: BrickClump, path: Path, slope_deg: float = 45.0) -> None:
+def plot_deposit(trajectory: Trajectory, brick: BodyShape, path: Path, slope_deg: float = 45.0) -> None:
     """Thickness map of the deposit (gridded at half a brick width, contours every 5 mm) with its
     length L, runout R, width W and centre of mass marked, bodies outside it as crosses; below it,
     the longitudinal section. One frame for every position: FRAME."""
@@ -102,9 +103,10 @@ def plot_deposit(trajectory: Trajectory, brick: BrickClump, path: Path, slope_de
     members = deposit.deposit_members(final, trajectory.radius)
     metrics = deposit.deposit_metrics(trajectory.position[0], final, trajectory.mass, trajectory.radius)
     rotations = quaternion_matrices(np.nan_to_num(trajectory.orientation[-1, members], nan=1.0))
-    spheres = bodies_sphere_centres(brick, final[members], rotations)
-    radii = np.broadcast_to(brick.radii, spheres.shape[:2])
-    x_edges, y_edges, thickness = deposit.thickness_map(spheres.reshape(-1, 3), radii.reshape(-1), slope_deg, brick.width / 2)
+    vertices, _ = brick.surface_mesh(6)  # the bodies' surfaces, whatever their kind
+    surface = final[members][:, None, :] + np.einsum("bij,vj->bvi", rotations, vertices)
+    x_edges, y_edges, thickness = deposit.thickness_map(surface.reshape(-1, 3), np.zeros(surface.shape[0] * surface.shape[1]),
+                                                        slope_deg, brick.extent[1] / 2)
     fig, (plan, section) = subplots(2, 1, figsize=(8, 9), constrained_layout=True, gridspec_kw={"height_ratios": [2, 1]})
     mesh = plan.pcolormesh(x_edges, y_edges, thickness.T * 1e3, cmap="YlOrBr", shading="flat")
     centres_x, centres_y = (x_edges[:-1] + x_edges[1:]) / 2, (y_edges[:-1] + y_edges[1:]) / 2

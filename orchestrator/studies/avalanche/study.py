@@ -19,7 +19,8 @@ from pydantic import Field, model_validator
 
 from orchestrator.post import deposit, front
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, pile_rows, rain_height, rain_positions
-from orchestrator.shapes.clump import BrickClump
+from orchestrator.bodies import BrickShape, ShapeKind
+from orchestrator.shapes import BodyShape
 from orchestrator.case import Case, CaseError, Name, Real, RestStop, Strict, parse_case
 from orchestrator.engines import DEFAULT_ENGINE, Engine, RunOptions, capabilities
 from orchestrator.results import Trajectory
@@ -62,6 +63,10 @@ class BrickSpec(Strict):
     # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
     # (required with a bevel).
     rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
+    # How the brick is realised (docs/bricks.md, "Kinds of brick"): `clump` (the layout above plus
+    # corner spheres) or `superquadric` (LIGGGHTS: one body with flat faces, this blockiness).
+    kind: ShapeKind = "clump"
+    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
 
     @model_validator(mode="after")
     def _rounding_needs_a_box(self) -> "BrickSpec":
@@ -69,8 +74,13 @@ class BrickSpec(Strict):
             raise ValueError(f"rounding: a bevelled brick has no corner spheres; allowed: 0 with bevel_deg > 0 (got {self.rounding!r})")
         return self
 
-    def build(self) -> BrickClump:
-        return BrickClump(self.length, self.width, self.thickness, self.density, self.layout, self.bevel_deg, rounding=self.rounding)
+    def shape_entry(self, name: str = "brick") -> dict[str, object]:
+        """The case's `shapes` entry of this brick."""
+        return {"name": name, "kind": self.kind, "length": self.length, "width": self.width, "thickness": self.thickness,
+                "layout": list(self.layout), "bevel_deg": self.bevel_deg, "rounding": self.rounding, "blockiness": list(self.blockiness)}
+
+    def build(self) -> BodyShape:
+        return BrickShape(**self.shape_entry()).body(self.density)
 
 
 class PairSpec(Strict):
@@ -203,8 +213,7 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
                 {"name": "box", "density": 1400.0},
             ],
             "contacts": contacts,
-            "shapes": [{"name": "brick", "length": spec.length, "width": spec.width, "thickness": spec.thickness, "layout": list(spec.layout),
-                        "bevel_deg": spec.bevel_deg, "rounding": spec.rounding}],
+            "shapes": [spec.shape_entry()],
             "bodies": {"clumps": clumps},
             "walls": walls,
             **extra,
