@@ -55,7 +55,7 @@ def test_good_case_files_load() -> None:
 
 @pytest.mark.parametrize(
     "command",
-    [["run"], ["render"], ["post"], ["doctor"], ["build-contact"], ["demo"], ["avalanche"],
+    [["run"], ["render"], ["post"], ["paraview"], ["doctor"], ["build-contact"], ["demo"], ["avalanche"],
      ["campaign", "run"], ["campaign", "status"], ["campaign", "table"], ["campaign", "plot"], ["campaign", "calibrate"],
      ["collapse", "run"], ["collapse", "calibrate"], ["collapse", "plot"], ["submit"], ["status"], ["slurm-job"]],
     ids=" ".join,

@@ -6,7 +6,7 @@ import datetime as dt
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, NoReturn
 
 import click
 from rich.console import Console
@@ -14,7 +14,9 @@ from rich.progress import Progress
 from rich.table import Table
 
 from orchestrator.engines import RunOptions
+from orchestrator.results import RELEASE_DIR, RESULTS, RUN_RECORD, read_json
 from orchestrator.rundir import Busy
+from orchestrator.validation import bounded
 
 def run_options() -> RunOptions:
     """How engines run (`demorch --mpi N`), kept by the main command for its subcommands."""
@@ -55,9 +57,14 @@ class OneLineErrors(click.Group):
         sys.exit(code if isinstance(code, int) else 0)
 
 
-def fail(message: str, code: int = 2) -> None:
+def fail(message: str, code: int = 2) -> NoReturn:
     errors.print(f"[bold red]error:[/] {message}", markup=True, highlight=False, soft_wrap=True)
     sys.exit(code)
+
+
+def damaged(where: Path, what: str, error: Exception) -> NoReturn:
+    """Fail with one line (exit 5): `where: what (the error, bounded); rerun the case`."""
+    fail(f"{where}: {what} ({bounded(f'{type(error).__name__}: {error}', 200)}); rerun the case", code=EXIT_DAMAGED)
 
 
 def warn(message: str) -> None:
@@ -68,15 +75,26 @@ def warn(message: str) -> None:
 MAX_TIMEOUT = 1e7  # s of wall time, about 16 weeks
 
 
-def writable_rundir(directory: Path) -> None:
-    """Create the run directory `directory` and check that files can be written in it, or fail with
-    one line (exit 2): a read-only file system or directory is the user's to fix, before any engine."""
+def writable_rundir(directory: Path, option: str = "--output") -> None:
+    """Create the output directory `directory` (given as `option`) and check that files can be written
+    in it, or fail with one line (exit 2): a read-only file system or directory is the user's to fix,
+    before any engine."""
     try:
         directory.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=directory):
             pass
     except OSError as error:
-        fail(f"--output: cannot write in {directory} ({error.strerror or error}); choose a writable directory")
+        fail(f"{option}: cannot write in {directory} ({error.strerror or error}); choose a writable directory")
+
+
+def results_path(directory: Path) -> Path:
+    """results.h5 of a run directory, or of a study directory's release (its run/); without one, fail
+    with one line (exit 2) naming the run's recorded status."""
+    for candidate in (directory, directory / RELEASE_DIR):
+        if (candidate / RESULTS).exists():
+            return candidate / RESULTS
+    record = read_json(directory / RUN_RECORD) or {}
+    fail(f"{directory} has no {RESULTS} (run status: {bounded(str(record.get('status', 'unknown')), 40)})")
 
 
 def default_rundir(case_name: str, engine: str) -> Path:

@@ -1,8 +1,8 @@
 """`demorch`: render decks, run cases, check the installation, summarise results.
 
 One module per command group: main (this: run, render, post, doctor, brick, build-contact),
-avalanche (avalanche, demo), campaign, collapse, submit (submit, status, slurm-job: SLURM); common
-holds what they share.
+avalanche (avalanche, demo), campaign, collapse, paraview, submit (submit, status, slurm-job: SLURM);
+common holds what they share.
 """
 
 from __future__ import annotations
@@ -23,11 +23,12 @@ from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
+from orchestrator.cli.paraview import paraview
 from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
 from orchestrator.cli.submit import slurm_job, status, submit
-from orchestrator.cli.common import (DAMAGE, EXIT_DAMAGED, EXIT_ENGINE, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, errors, default_rundir, fail,
-                                     metrics_table, progress_callback, run_options, warn, writable_rundir)
+from orchestrator.cli.common import (DAMAGE, EXIT_ENGINE, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, damaged, errors, default_rundir, fail,
+                                     metrics_table, progress_callback, results_path, run_options, warn, writable_rundir)
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV, MPI_ENV, RunOptions, check_interval
 from orchestrator import preflight
@@ -35,8 +36,7 @@ from orchestrator.estimate import check_machine
 from orchestrator.plan import RunPlan, make_plan
 from orchestrator.post import summary as metrics
 from orchestrator.post.lost import NoBodyLeft
-from orchestrator.results import REPORT, RUN_RECORD, read_results
-from orchestrator.rundir import read_json
+from orchestrator.results import REPORT, read_results
 from orchestrator.validation import bounded
 from orchestrator.runner import RESULTS, render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
@@ -160,7 +160,7 @@ def post(rundir: Path, as_json: bool) -> None:
     except NoBodyLeft as error:  # intact results of a run that lost every body: the engine's outcome, not damage
         fail(f"{rundir}: {error}; rerun with a larger `domain:`", code=EXIT_ENGINE)
     except DAMAGE as error:  # a truncated, empty or foreign file where a result should be
-        fail(f"{rundir}: damaged results ({bounded(f'{type(error).__name__}: {error}', 200)}); rerun the case", code=EXIT_DAMAGED)
+        damaged(rundir, "damaged results", error)
 
 
 def _post(rundir: Path, as_json: bool) -> None:
@@ -173,11 +173,7 @@ def _post(rundir: Path, as_json: bool) -> None:
             console.print(study_table(rundir.name, report))
             console.print(f"report: {page}")
         return
-    path = rundir / RESULTS
-    if not path.exists():
-        record = read_json(rundir / RUN_RECORD) or {}
-        fail(f"{rundir} has no {RESULTS} (run status: {bounded(str(record.get('status', 'unknown')), 40)})")
-    trajectory = read_results(path)
+    trajectory = read_results(results_path(rundir))
     values = metrics.summary(trajectory)
     if as_json:
         console.print_json(json.dumps(values))
@@ -255,7 +251,7 @@ def build_contact(force: bool) -> None:
         console.print_json(json.dumps(adapter.law_plugin_status(), default=str))
 
 
-for command in (avalanche, demo, campaign, collapse, parity, validation, schema_command, submit, status, slurm_job):
+for command in (avalanche, demo, campaign, collapse, parity, paraview, validation, schema_command, submit, status, slurm_job):
     main.add_command(command)
 
 

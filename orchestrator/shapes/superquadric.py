@@ -123,6 +123,9 @@ class BrickSuperquadric:
 
 
 def _signed_power(t: np.ndarray, exponent: float) -> np.ndarray:
+    """sign(t) |t|^exponent, with |t| below 1e-12 taken as 0: cos(π/2) is 6e-17 in floating point and
+    its 1/8th power 0.009, which put the mesh's points on the axes 0.1 mm off them."""
+    t = np.where(np.abs(t) < 1e-12, 0.0, t)
     return np.sign(t) * np.abs(t) ** exponent
 
 
