@@ -41,7 +41,7 @@ def measure(study_path: Path, root: Path) -> dict[str, object]:
     directory, reused = ensure_run(packing_case(study), root, KIND.preparation, lambda d: KIND.state_file(study, d), None, None, options)
     wall = time.perf_counter() - started
     packed = read_results(directory / "results.h5")
-    density = apparent_density(study.geometry.build(), packed.position[-1], packed.orientation[-1], study.brick.build())
+    density = apparent_density(study.geometry.build(), packed.position[-1], packed.orientation[-1], study.brick_spec.build())
     record = json.loads((directory / "run.json").read_text())
     return {
         "date": datetime.date.today().isoformat(),

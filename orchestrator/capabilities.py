@@ -32,6 +32,8 @@ class Capabilities:
     contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
     shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric).
     glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
+    preferred_brick: the kind of brick the avalanche studies use on it unless told (chosen by
+        measurement: docs/bricks.md).
     """
 
     clumps: bool
@@ -46,6 +48,7 @@ class Capabilities:
     contact_output: bool = False
     shape_kinds: tuple[str, ...] = ("clump",)
     glued_kinds: tuple[str, ...] = ()
+    preferred_brick: str = "clump"
 
 
 @dataclass(frozen=True)
@@ -67,7 +70,8 @@ ENGINES: dict[str, EngineEntry] = {
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
                          implicit=False, state_file="state.restart", contact_output=True,
-                         shape_kinds=("clump", "superquadric"), glued_kinds=("clump", "superquadric")),
+                         shape_kinds=("clump", "superquadric"), glued_kinds=("clump", "superquadric"),
+                         preferred_brick="superquadric"),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
         ),
         EngineEntry(

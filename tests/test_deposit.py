@@ -49,6 +49,13 @@ def test_wedge_deposit_centre_of_mass() -> None:
     assert m.height == pytest.approx(0.1 + 1e-4)
 
 
+def test_bodies_resting_upslope_of_the_toe_are_counted_on_the_slope() -> None:
+    final = grid((0.0, 0.3), (-0.05, 0.05), (0.005, 0.005))
+    final[:7, 0] -= 0.2  # seven bodies left on the slope (x < 0), the rest on the board
+    m = deposit_metrics(released(final), final, np.ones(len(final)), np.full(len(final), R))
+    assert m.bodies_on_slope == int((final[:, 0] < 0).sum()) == 7
+
+
 def test_outliers_do_not_set_the_extents() -> None:
     final = grid((0.5, 1.0), (-0.1, 0.1), (0.005, 0.025))
     strays = np.array([[2.5, 0.0, 0.005], [1.0, 1.5, 0.005]])

@@ -12,6 +12,8 @@ flow, z vertical with the run-out board at z = 0. All metrics use horizontal dis
 - φ_app, fahrböschung: atan(z of the top of the initial mass / horizontal distance from the top of
   the initial mass to the distal end), the distal end lying on the board (z = 0).
 
+- bodies on the slope: bodies whose centre came to rest upslope of the toe (x < 0), all bodies counted.
+
 Outliers: a few bricks that bounce far ahead would set L, R and W alone. The deposit is therefore
 the largest cluster of bodies whose centres are linked when closer than `link_distance` (default:
 3 × the largest body diameter), a density criterion; bodies outside it are reported as outliers, and the raw extents
@@ -45,6 +47,7 @@ class DepositMetrics:
     width_raw: float
     bodies_in_deposit: int
     outliers: int
+    bodies_on_slope: int = 0  # centres upslope of the toe (x < 0)
 
     def as_dict(self) -> dict[str, float]:
         return {key: float(value) for key, value in asdict(self).items()}
@@ -110,6 +113,7 @@ def deposit_metrics(
         width_raw=width_raw,
         bodies_in_deposit=int(keep.sum()),
         outliers=int(present.sum() - keep.sum()),
+        bodies_on_slope=int((x[present] < 0.0).sum()),
     )
 
 

@@ -48,6 +48,7 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
         ("φ_CM (°)", deposit["travel_angle_cm_deg"], "", ""),
         ("φ_app (°)", deposit["fahrboschung_deg"], "", ""),
         ("outlier bricks", deposit["outliers"], "", ""),
+        ("bricks left on the slope", deposit.get("bodies_on_slope", float("nan")), "", ""),
         ("front max speed (m/s)", report["front"]["max_velocity"], "", ""),
         ("front final position (m)", report["front"]["final_position"], "", ""),
     ]

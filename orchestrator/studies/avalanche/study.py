@@ -65,7 +65,8 @@ class BrickSpec(Strict):
     rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
     # How the brick is realised (docs/bricks.md, "Kinds of brick"): `clump` (the layout above plus
     # corner spheres) or `superquadric` (LIGGGHTS: one body with flat faces, this blockiness).
-    kind: ShapeKind = "clump"
+    # Unset: the engine's preferred kind (AvalancheStudy.brick_spec), a clump when bevelled.
+    kind: ShapeKind | None = None
     blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
 
     @model_validator(mode="after")
@@ -75,8 +76,8 @@ class BrickSpec(Strict):
         return self
 
     def shape_entry(self, name: str = "brick") -> dict[str, object]:
-        """The case's `shapes` entry of this brick."""
-        return {"name": name, "kind": self.kind, "length": self.length, "width": self.width, "thickness": self.thickness,
+        """The case's `shapes` entry of this brick (a clump when `kind` is unset)."""
+        return {"name": name, "kind": self.kind or "clump", "length": self.length, "width": self.width, "thickness": self.thickness,
                 "layout": list(self.layout), "bevel_deg": self.bevel_deg, "rounding": self.rounding, "blockiness": list(self.blockiness)}
 
     def build(self) -> BodyShape:
@@ -157,8 +158,18 @@ class AvalancheStudy(Strict):
         return 1000.0 if self.packing.kind == "random_pour" else 1600.0
 
     @property
+    def brick_spec(self) -> BrickSpec:
+        """The brick with its kind settled: as given, else the engine's preferred kind
+        (capabilities.preferred_brick: the superquadric on LIGGGHTS, chosen by measurement,
+        docs/bricks.md), a clump where that cannot be had (a bevelled brick)."""
+        if self.brick.kind is not None:
+            return self.brick
+        preferred = capabilities(self.engine).preferred_brick
+        return self.brick.model_copy(update={"kind": "clump" if self.brick.bevel_deg else preferred})
+
+    @property
     def brick_count(self) -> int:
-        return brick_count(self.packing.volume, self.target_density, self.brick.build())
+        return brick_count(self.packing.volume, self.target_density, self.brick_spec.build())
 
 
 def _contacts(spec: ContactSpec, brick_brick_mu: float | None = None) -> list[dict[str, Any]]:
@@ -185,7 +196,7 @@ PILE_GAP = 0.0002
 
 def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, float]:
     """Where the bricks start (rain cells or the ordered pile) and the height of the box walls."""
-    geometry, brick, count = study.geometry.build(), study.brick.build(), study.brick_count
+    geometry, brick, count = study.geometry.build(), study.brick_spec.build(), study.brick_count
     if study.packing.kind == "random_pour":
         # 3 mm between the cells of the rain grid: part of the packing's definition (the recorded
         # packings of docs/validation.md use it), not a placement tolerance.
@@ -199,7 +210,7 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
 
 def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, rest: RestStop | None,
           contacts: list[dict[str, Any]], clumps: list[dict[str, Any]], walls: list[dict[str, object]], **extra: Any) -> Case:
-    spec = study.brick
+    spec = study.brick_spec
     return parse_case(
         {
             "name": name,
@@ -297,7 +308,7 @@ class AvalancheKind(StudyKind):
         return release_case(study, packed, state)
 
     def measure(self, study: AvalancheStudy, trajectory: Trajectory, release_dir: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        brick = study.brick.build()
+        brick = study.brick_spec.build()
         report = measure(trajectory, brick, gravity=-saved_case(release_dir).gravity[2])
         density = apparent_density(study.geometry.build(), trajectory.position[0], trajectory.orientation[0], brick)
         report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density}
