@@ -73,6 +73,9 @@ ENGINES: dict[str, EngineEntry] = {
                          shape_kinds=("clump", "superquadric"), glued_kinds=("clump", "superquadric"),
                          preferred_brick="superquadric"),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
+            (("brick on brick, aligned_y, 40.2°", "slides 0.234 m: one superquadric contact under a face tilts to carry the "
+              "friction's moment, and across the 15 mm width that tilt lowers the friction angle (2026-12-02)"),
+             ("brick on brick, offset_x_3.9mm, 40.2°", "slides 0.023 m: as across the width (2026-12-02)")),
         ),
         EngineEntry(
             "yade",
@@ -81,7 +84,13 @@ ENGINES: dict[str, EngineEntry] = {
                          implicit=False, contact_output=True, glued_kinds=("clump",)),
             "YADE 2023.02a (Debian), the bilinear law emulated by a dashpot",
             (("sphere on a mesh, shared edge", "e² 0.414: a sphere is met once per facet it touches (two here)"),
-             ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)")),
+             ("sphere on a mesh, shared vertex", "e² 0.299: a sphere is met once per facet it touches (four here)"),
+             *((f"brick on brick, {placement}, 40.2°", f"slides {slide} m: the clump's faces are rows of spheres that "
+                "interlock or roll over each other (2026-12-02)")
+               for placement, slide in (("aligned", "0.0050"), ("aligned_y", "0.35"), ("offset_x_3.9mm", "0.0015"),
+                                        ("yaw_90deg", "0.26"), ("yaw_30deg", "0.0043"))),
+             ("brick on brick, aligned, 47°", "a = 2.98 × Coulomb's: the upper clump tips off the lower one's edge "
+              "while sliding (2026-12-02)")),
         ),
         EngineEntry(
             "cocd",

@@ -15,7 +15,11 @@ without a simulation:
 - Coulomb friction on a 1 m incline, a rotation-locked sphere (a block): at tan α = μ + 0.05 its
   acceleration is g (sin α − μ cos α) within 2 %; at tan α = μ − 0.02 it travels less than 1e-5 m
   in 0.3 s (elastic creep of the tangential spring: about 2e-7 m);
-- a body leaving the simulation domain ends the run with the same message on every engine.
+- a body leaving the simulation domain ends the run with the same message on every engine;
+- brick on brick (the engine's preferred brick on a glued one, gravity tilted): at 40.2°, half a
+  degree below the friction angle atan 0.86, the upper brick slides at most 1 mm in 0.4 s in each of
+  the five placements of the 2012 study's own runs; at 47° it slides at g (sin θ − 0.86 cos θ)
+  within 2 % (reference.toml [brick_pair.richefeu_code]).
 
 KNOWN_GAPS holds the cases an engine is known to miss, with the value measured; the parity tests
 expect them to fail (strictly: a fix shows as an unexpected pass) and `demorch parity` marks them.
@@ -37,6 +41,7 @@ from orchestrator.engines import EngineError
 from orchestrator.capabilities import ENGINE_NAMES, ENGINES, engines_with
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
+from orchestrator.studies import brick_drop, brick_pair
 
 EN2, SPEED, RADIUS, MU = 0.53, 0.5, 0.005, 0.46
 TILTED = (0.981060262190, 0.172987393925, 0.085831651177, -0.015134435901)  # Ry(10°)·Rx(20°), (w, x, y, z)
@@ -277,7 +282,26 @@ MATRIX: tuple[MicroCase, ...] = (
     MicroCase("sphere leaving the domain", f"run ends '{LEAVING}' (1: yes)", 1.0, 0.0, False, ENGINE_NAMES,
               leaving_case, lambda trajectory: 0.0, ends_with=LEAVING),
 )
+# Brick on brick (studies/brick_pair.py): the engine's preferred brick resting on a glued one,
+# gravity tilted. The 2012 study's own code holds at 40.2° (slides from 40.70° in every placement)
+# and then slides at g (sin θ − 0.86 cos θ) (reference.toml [brick_pair.richefeu_code]).
+BRICK_PAIRS = tuple(
+    MicroCase(f"brick on brick, {placement}, 40.2°", "slide in 0.4 s (m)", 0.0, 1e-3, False, CLUMPS,
+              lambda engine, directory, p=placement: brick_pair.pair_case(engine, preferred_brick(engine), p, 40.2),
+              lambda trajectory, p=placement: brick_pair.slide(trajectory, p))
+    for placement in brick_pair.PLACEMENTS
+) + (
+    MicroCase("brick on brick, aligned, 47°", "a / g (sin θ − 0.86 cos θ)", 1.0, 0.02, True, CLUMPS,
+              lambda engine, directory: brick_pair.pair_case(engine, preferred_brick(engine), "aligned", 47.0),
+              lambda trajectory: brick_pair.sliding_acceleration(trajectory) / brick_pair.expected_acceleration(47.0)),
+)
+MATRIX = MATRIX + BRICK_PAIRS
 CASES = {case.name: case for case in MATRIX}
+
+
+def preferred_brick(engine: str) -> dict:
+    """The study's brick as the engine's preferred kind (capabilities.preferred_brick)."""
+    return brick_drop.study_brick(kind=ENGINES[engine].capabilities.preferred_brick)
 
 
 def run_micro(case: MicroCase, engine: str, directory: Path) -> float:

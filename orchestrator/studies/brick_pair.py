@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.case import Case, parse_case
-from orchestrator.results import RELEASE_DIR, read_results
+from orchestrator.results import RELEASE_DIR, Trajectory, read_results
 from orchestrator.runner import run_case
 
 G = 9.81
@@ -50,15 +50,29 @@ def pair_case(engine: str, shape: dict[str, Any], placement: str, angle_deg: flo
 
 def run_pair(engine: str, shape: dict[str, Any], placement: str, angle_deg: float, directory: Path) -> dict[str, float]:
     """Run one tilt: slide (m) of the upper brick after the run along the slope, its sliding
-    acceleration (m/s², a parabola fitted over ACCELERATION_WINDOW) and how far the glued one moved (m)."""
+    acceleration (m/s², sliding_acceleration) and how far the glued one moved (m)."""
     case = pair_case(engine, shape, placement, angle_deg)
     run_case(case, directory, directory / RELEASE_DIR)
     trajectory = read_results(directory / RELEASE_DIR / "results.h5")
-    axis = 1 if placement == "aligned_y" else 0
-    along = trajectory.position[:, 1, axis] - trajectory.position[0, 1, axis]
-    window = (trajectory.time >= ACCELERATION_WINDOW[0]) & (trajectory.time <= ACCELERATION_WINDOW[1])
-    return {"slide": float(along[-1]), "acceleration": float(2.0 * np.polyfit(trajectory.time[window], along[window], 2)[0]),
+    return {"slide": slide(trajectory, placement), "acceleration": sliding_acceleration(trajectory, placement),
             "glued_moved": float(np.abs(trajectory.position[:, 0] - trajectory.position[0, 0]).max())}
+
+
+def _along(trajectory: Trajectory, placement: str) -> np.ndarray:
+    """(F,) m: the upper brick's travel along the slope."""
+    axis = 1 if placement == "aligned_y" else 0
+    return trajectory.position[:, 1, axis] - trajectory.position[0, 1, axis]
+
+
+def slide(trajectory: Trajectory, placement: str) -> float:
+    """m: the upper brick's travel along the slope at the end of the run."""
+    return float(_along(trajectory, placement)[-1])
+
+
+def sliding_acceleration(trajectory: Trajectory, placement: str = "aligned") -> float:
+    """m/s²: twice the leading coefficient of a parabola fitted to the travel over ACCELERATION_WINDOW."""
+    window = (trajectory.time >= ACCELERATION_WINDOW[0]) & (trajectory.time <= ACCELERATION_WINDOW[1])
+    return float(2.0 * np.polyfit(trajectory.time[window], _along(trajectory, placement)[window], 2)[0])
 
 
 def expected_acceleration(angle_deg: float, mu: float = CONSTANTS["mu"]) -> float:
