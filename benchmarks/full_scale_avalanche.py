@@ -1,4 +1,5 @@
-"""The full-scale random pour (cases/avalanche/random_pour_full.yaml), measured end to end.
+"""An avalanche set-up measured end to end: the full-scale random pour (cases/avalanche/random_pour_full.yaml)
+by default, or any study given, e.g. the quarter set-up (cases/avalanche/random_pour_quarter.yaml).
 
 Run: .venv/bin/python benchmarks/full_scale_avalanche.py [STUDY.yaml] → docs/benchmarks/full_scale.json,
 the study's report (plots, HTML) under runs/full-scale/, and a progress log in runs/full-scale/progress.log.
@@ -90,6 +91,7 @@ def main() -> None:
         "study": str(study_path.relative_to(REPO) if study_path.is_relative_to(REPO) else study_path),
         "engine": study.engine.value,
         "bricks": release.n_bodies,
+        "brick_kind": study.brick_spec.kind,
         "wall_s": wall,
         **stages,
         "peak_rss_children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0 if ran_all else None,
