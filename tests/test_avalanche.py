@@ -134,7 +134,8 @@ def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path) -
     added would shift a brick by its overlap at once (1e-5 m and more), far above the 1e-8 m allowed.
     """
     study = tiny_study("liggghts")
-    study = study.model_copy(update={"packing": study.packing.model_copy(update={"settle_time": 0.16})})
+    study = study.model_copy(update={"packing": study.packing.model_copy(update={"settle_time": 0.16}),
+                                     "brick": study.brick.model_copy(update={"kind": "clump"})})
     pours = []
     for name, cap in (("own_bins", float("inf")), ("capped_bins", 2e5)):
         run_case(packing_case(study), tmp_path, tmp_path / name, adapter=liggghts.LiggghtsAdapter(max_bins=cap))
