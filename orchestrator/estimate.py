@@ -61,7 +61,7 @@ def _gb(size: float) -> str:
 
 def sphere_count(case: Case) -> int:
     """Particles the engine moves: free spheres, every sphere of every clump, one per superquadric."""
-    per_kind = {(c.shape, c.material): getattr(case.shape(c.shape).body(case.material(c.material).density), "n_spheres", 1)
+    per_kind = {(c.shape, c.material): case.shape(c.shape).body(case.material(c.material).density).particles
                 for c in case.bodies.clumps}
     return len(case.bodies.spheres) + sum(per_kind[(c.shape, c.material)] for c in case.bodies.clumps)
 

@@ -44,6 +44,9 @@ class BodyShape(Protocol):
     def extent(self) -> np.ndarray: ...  # (3,) m, the centred box holding the solid
 
     @property
+    def particles(self) -> int: ...  # particles the engine moves for one body (a clump's spheres; 1)
+
+    @property
     def face_contacts(self) -> int: ...  # contacts of a flat landing (the stiffest contact is this × k_n)
 
     def surface_mesh(self, resolution: int = 24) -> tuple[np.ndarray, np.ndarray]: ...  # (n, 3) m, (m, 3) indices

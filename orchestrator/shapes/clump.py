@@ -133,6 +133,11 @@ class BrickClump:
         return len(self.radii)
 
     @property
+    def particles(self) -> int:
+        """Particles the engine moves for this body: its spheres."""
+        return self.n_spheres
+
+    @property
     def face_contacts(self) -> int:
         """Spheres that touch a plane at once when the brick lies on its largest face: the stiffness
         of a flat landing is this many times k_n (the shortest contact the time step must resolve)."""

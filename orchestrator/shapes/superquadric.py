@@ -105,6 +105,11 @@ class BrickSuperquadric:
         return self.bounding_radius
 
     @property
+    def particles(self) -> int:
+        """Particles the engine moves for this body: one."""
+        return 1
+
+    @property
     def face_contacts(self) -> int:
         """Contacts when the brick lies on its largest face: one (a face is one smooth surface)."""
         return 1

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.case import Case, parse_case
-from orchestrator.results import RELEASE_DIR, Trajectory, read_results
+from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
 
 G = 9.81
@@ -53,7 +53,7 @@ def run_pair(engine: str, shape: dict[str, Any], placement: str, angle_deg: floa
     acceleration (m/s², sliding_acceleration) and how far the glued one moved (m)."""
     case = pair_case(engine, shape, placement, angle_deg)
     run_case(case, directory, directory / RELEASE_DIR)
-    trajectory = read_results(directory / RELEASE_DIR / "results.h5")
+    trajectory = read_results(directory / RELEASE_DIR / RESULTS)
     return {"slide": slide(trajectory, placement), "acceleration": sliding_acceleration(trajectory, placement),
             "glued_moved": float(np.abs(trajectory.position[:, 0] - trajectory.position[0, 0]).max())}
 

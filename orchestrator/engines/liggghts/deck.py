@@ -99,11 +99,6 @@ def bin_size(domain: Domain, cutoff: float, max_bins: float = MAX_BINS) -> float
     return capped if capped > 0.5 * cutoff else None
 
 
-def spheres_per_clump(case: Case) -> str:
-    counts = sorted({case.shape(c.shape).clump(case.material(c.material).density).n_spheres for c in case.bodies.clumps})
-    return " or ".join(str(n) for n in counts) + " spheres each"
-
-
 def _numbers(values: object) -> str:
     return " ".join(repr(float(v)) for v in values)  # type: ignore[union-attr]
 

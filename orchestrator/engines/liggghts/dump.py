@@ -11,28 +11,28 @@ from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.case import Case
 
 
-def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(F, B, 3) position, velocity, spin of spheres by atom id; a lost atom is NaN from then on."""
-    position = np.full((len(frames), len(ids), 3), np.nan)
-    velocity, spin = position.copy(), position.copy()
+def atom_columns(ids: np.ndarray, frames: list[np.ndarray], first: list[int], widths: list[int]) -> list[np.ndarray]:
+    """Per-atom columns by atom id: one (F, B, width) array per (first column, width); a lost atom
+    is NaN from then on."""
+    arrays = [np.full((len(frames), len(ids), width), np.nan) for width in widths]
     index_of = {int(i): k for k, i in enumerate(ids)}
     for f, rows in enumerate(frames):
         slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
-        position[f, slots] = rows[:, column["x"] : column["z"] + 1]
-        velocity[f, slots] = rows[:, column["vx"] : column["vz"] + 1]
-        spin[f, slots] = rows[:, column["omegax"] : column["omegaz"] + 1]
+        for array, start, width in zip(arrays, first, widths):
+            array[f, slots] = rows[:, start : start + width]
+    return arrays
+
+
+def sphere_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(F, B, 3) position, velocity, spin of spheres by atom id; a lost atom is NaN from then on."""
+    position, velocity, spin = atom_columns(ids, frames, [column["x"], column["vx"], column["omegax"]], [3, 3, 3])
     return position, velocity, spin
 
 
 def superquadric_states(ids: np.ndarray, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(F, B, 3) position, velocity, spin and (F, B, 4) orientation (w, x, y, z) of superquadric
     bodies (one atom each, columns quat1..quat4); a lost body is NaN from then on."""
-    position, velocity, spin = sphere_states(ids, column, frames)
-    orientation = np.full(position.shape[:2] + (4,), np.nan)
-    index_of = {int(i): k for k, i in enumerate(ids)}
-    for f, rows in enumerate(frames):
-        slots = np.array([index_of[int(i)] for i in rows[:, 0]], dtype=np.int64)
-        orientation[f, slots] = rows[:, column["quat1"] : column["quat4"] + 1]
+    position, velocity, spin, orientation = atom_columns(ids, frames, [column["x"], column["vx"], column["omegax"], column["quat1"]], [3, 3, 3, 4])
     return position, velocity, spin, orientation
 
 

@@ -52,6 +52,3 @@ def set_commands(case: Case) -> list[str]:
                         f"quat_direct {w!r} {x!r} {y!r} {z!r} {spin}")
     return commands
 
-
-def largest_radius(case: Case) -> float:
-    return max(body.bounding_radius for body in bodies(case))
