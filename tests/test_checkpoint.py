@@ -224,6 +224,24 @@ def test_a_checkpoint_counts_once_sealed_and_the_two_newest_sealed_are_kept(tmp_
     assert not (tmp_path / "checkpoint.100.restart.sha256").exists()
 
 
+def test_a_liggghts_checkpoint_is_sealed_only_once_a_later_step_is_reported(tmp_path: Path) -> None:
+    """LIGGGHTS prints the thermo line of step S, ends the sub-run, then writes checkpoint S
+    (`write_restart`), then prints S again as the next sub-run starts: at either line of S the file
+    may still be being written, so it is sealed at the next step reported."""
+    from orchestrator.engines.liggghts.adapter import ThermoWatcher, seal_behind
+
+    watcher = ThermoWatcher(1e-5, seal_behind(tmp_path, total=9330))
+    (tmp_path / "checkpoint.3110.restart").write_bytes(b"half of a restart file")
+    for line in ("    3110       27  4.5002302e-18 ", "    3110       27  4.5002302e-18 "):
+        watcher(line)
+        assert checkpoint.usable(tmp_path, "restart") == []
+    watcher("    3732       27  5.5879222e-21 ")
+    assert [step for step, _ in checkpoint.usable(tmp_path, "restart")] == [3110]
+    (tmp_path / "checkpoint.9330.restart").write_bytes(b"the last step")
+    watcher("    9330       27  1.0e-21 ")
+    assert [step for step, _ in checkpoint.usable(tmp_path, "restart")] == [3110]  # the last step's stays unsealed
+
+
 def test_the_checkpoint_interval_is_whole_output_intervals_and_can_be_turned_off(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv(CHECKPOINT_ENV, raising=False)
     plan = dict(duration=1.0, dt=1e-4, output_every=100, total_steps=10_000)

@@ -10,8 +10,9 @@ first frame on (`merge`).
 
 A checkpoint is sealed once it is complete: its sha256 is written beside it
 (`checkpoint.<step>.<ext>.sha256`) by the engine's runner after the file took its name (YADE, cocd)
-or by the orchestrator once the engine has gone past its step (LIGGGHTS writes a restart file before
-the thermo line of its step). A run continues only from a sealed checkpoint whose content still
+or by the orchestrator once the engine reports a later step (LIGGGHTS writes a checkpoint between two
+sub-runs, after the thermo line that ends the first: a checkpoint is complete only once a thermo line
+of a later step is out). A run continues only from a sealed checkpoint whose content still
 matches its seal, the newest such; one that does not match (truncated, zeroed, edited) is set aside
 as `checkpoint.<step>.<ext>.damaged` (kept, never deleted) and the next older one is tried; one cut
 short while being written has no seal and is never used. The two newest sealed checkpoints are

@@ -55,6 +55,19 @@ class ThermoWatcher:
         return step * self.dt
 
 
+def seal_behind(rundir: Path, total: int) -> Callable[[int], None]:
+    """What to do at each thermo line of step S: seal the checkpoints of steps before S, prune the old.
+
+    The checkpoint of step S is written by `write_restart` after the thermo line of S that ends a
+    sub-run, so it is complete only once a thermo line of a later step is out (sealing at S itself
+    could hash a file still being written). One written at the last step stays unsealed, as the
+    other engines write none there."""
+    def on_step(step: int) -> None:
+        checkpoint.seal(rundir, CHECKPOINT_EXT, min(step - 1, total - 1))
+        checkpoint.prune(rundir, CHECKPOINT_EXT)
+    return on_step
+
+
 class LiggghtsAdapter(AdapterDefaults):
     name = "liggghts"
     checkpoint_ext = CHECKPOINT_EXT
@@ -123,10 +136,7 @@ class LiggghtsAdapter(AdapterDefaults):
         deck = rundir / segment_name(DECK_NAME, plan.segment)
         log = rundir / self.log_name(plan)
         dt, total = plan.schedule.dt, plan.schedule.total_steps
-        # A checkpoint before a thermo line is complete (LIGGGHTS writes restart files before thermo).
-        # `restart N` also writes one at the last step: left unsealed, as the other engines write none there.
-        watcher = ThermoWatcher(dt, lambda step: (checkpoint.seal(rundir, CHECKPOINT_EXT, min(step, total - 1)),
-                                                  checkpoint.prune(rundir, CHECKPOINT_EXT)))
+        watcher = ThermoWatcher(dt, seal_behind(rundir, total))
         env = dict(os.environ)
         executable = None
         if superquadrics.is_superquadric_case(case):  # Debian's build has no superquadrics: the source-built one
