@@ -66,7 +66,7 @@ def measure(bricks: int) -> list[dict]:
             write_series(case, trajectory, Path(scratch), resolution=None if latitudes is None else dict.fromkeys(KINDS, latitudes))
             seconds = (time.perf_counter() - started) / FRAMES
             size = sum(p.stat().st_size for p in Path(scratch).glob("bodies_*.vtu")) / FRAMES
-            mesh = meshio.read(Path(scratch) / "bodies_00000.vtu")
+            mesh = meshio.read(next(Path(scratch).glob("bodies_*_00000.vtu")))  # the bricks: one kind, one file a frame
         rows.append({"shape": name, "bricks": bricks, "vertices_per_brick": len(mesh.points) // bricks,
                      "triangles_per_brick": sum(len(b.data) for b in mesh.cells) // bricks,
                      "seconds_per_frame": round(seconds, 2), "mb_per_frame": round(size / 1e6, 1),

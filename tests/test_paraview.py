@@ -22,18 +22,21 @@ from orchestrator.shapes.clump import unit_sphere_mesh
 from tests.conftest import assert_one_line_error, pile_case, requires_yade, run_cli
 
 
-def collection(path: Path) -> list[tuple[float, Path]]:
-    """(time s, file) of each dataset of a .pvd."""
+def collection(path: Path) -> list[tuple[float, str, Path]]:
+    """(time s, part name, file) of each dataset of a .pvd; the part number is the name's index in KINDS."""
     root = ET.parse(path).getroot()
     assert root.get("type") == "Collection"
-    return [(float(d.get("timestep")), path.parent / d.get("file")) for d in root.iter("DataSet")]
+    datasets = [(float(d.get("timestep")), d.get("name"), path.parent / d.get("file")) for d in root.iter("DataSet")]
+    for d in root.iter("DataSet"):
+        assert d.get("part") == str(KINDS.index(d.get("name")) if d.get("name") in KINDS else 0)
+    return datasets
 
 
-def body_cells(mesh: meshio.Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(triangles (m, 3), body (m,), kind (m,)) of a frame read back: a .vtu keeps cells, not blocks."""
-    assert {block.type for block in mesh.cells} == {"triangle"}
-    return (np.concatenate([block.data for block in mesh.cells]), np.concatenate(mesh.cell_data["body"]),
-            np.concatenate(mesh.cell_data["kind"]))
+def body_cells(mesh: meshio.Mesh, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """(triangles (m, 3), body (m,)) of one kind's piece of a frame read back: one triangle block."""
+    assert [block.type for block in mesh.cells] == ["triangle"]
+    assert set(mesh.cell_data["kind"][0]) == {KINDS.index(kind)}
+    return mesh.cells[0].data, mesh.cell_data["body"][0]
 
 
 def triangles_per_body(case: Case) -> np.ndarray:
@@ -59,8 +62,8 @@ def mixed_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @requires_yade
 @pytest.mark.engine
 def test_every_frame_holds_every_body_surface_where_the_trajectory_puts_it(mixed_run: Path, tmp_path: Path) -> None:
-    """Frames equal the .pvd's datasets; triangles come in one run per kind, bodies × triangles per
-    mesh of them; the vertex mean of a body's triangles is its centre (symmetric brick and sphere:
+    """Each frame is one .pvd dataset per kind, each read by meshio as one triangle block holding
+    bodies × triangles per mesh of them; the vertex mean of a body's triangles is its centre (symmetric brick and sphere:
     1e-6 m); the velocity at each vertex is its body's."""
     code, output, _, _ = run_cli(["paraview", str(mixed_run.parent), "--out", str(tmp_path)])
     assert code == 0, output
@@ -68,18 +71,21 @@ def test_every_frame_holds_every_body_surface_where_the_trajectory_puts_it(mixed
     trajectory = read_results(mixed_run / RESULTS)
     case = parse_case(json.loads((mixed_run / "case.json").read_text()))
     datasets = collection(tmp_path / "bodies.pvd")
-    assert len(datasets) == trajectory.n_frames == len(list(tmp_path.glob("bodies_*.vtu")))
+    assert len(datasets) == 2 * trajectory.n_frames == len(list(tmp_path.glob("bodies_*.vtu")))
+    assert [name for _, name, _ in datasets] == ["sphere", "clump"] * trajectory.n_frames  # one part per kind and frame
     expected_triangles = triangles_per_body(case)
-    for frame, (time, path) in enumerate(datasets):
+    for index, (time, kind, path) in enumerate(datasets):
+        frame = index // 2
         assert time == pytest.approx(trajectory.time[frame], abs=1e-12)
+        assert path.name == f"bodies_{kind}_{frame:05d}.vtu"
         mesh = meshio.read(path)
-        triangles, body, kind = body_cells(mesh)
-        assert [KINDS[k] for k in np.unique(kind)] == ["sphere", "clump"]
-        assert np.count_nonzero(np.diff(kind)) == 1  # one run of cells per kind, spheres first
-        assert len(triangles) == expected_triangles.sum()
-        assert np.bincount(body).tolist() == expected_triangles.tolist()
+        triangles, body = body_cells(mesh, kind)
+        mine = np.flatnonzero([k < len(case.bodies.spheres) if kind == "sphere" else k >= len(case.bodies.spheres)
+                               for k in range(trajectory.n_bodies)])
+        assert len(triangles) == expected_triangles[mine].sum()
+        assert np.bincount(body, minlength=trajectory.n_bodies)[mine].tolist() == expected_triangles[mine].tolist()
         velocity = mesh.point_data["velocity"]
-        for k in range(trajectory.n_bodies):
+        for k in mine:
             vertices = np.unique(triangles[body == k])
             assert mesh.points[vertices].astype(float).mean(axis=0) == pytest.approx(trajectory.position[frame, k], abs=1e-6)
             assert velocity[vertices] == pytest.approx(np.broadcast_to(trajectory.velocity[frame, k], (len(vertices), 3)), rel=1e-6, abs=1e-9)
@@ -96,9 +102,9 @@ def test_recorded_contacts_are_lines_with_their_normal_force(mixed_run: Path, tm
     contacts = trajectory.contacts
     assert contacts is not None and series.contacts is not None
     datasets = collection(series.contacts)
-    assert [path.name for _, path in datasets] == [f"contacts_{f:05d}.vtu" for f in series.frames]
+    assert [path.name for _, _, path in datasets] == [f"contacts_{f:05d}.vtu" for f in series.frames]
     seen = 0
-    for frame, (_, path) in zip(series.frames, datasets):
+    for frame, (_, _, path) in zip(series.frames, datasets):
         rows = contacts.frame(frame)
         pairs, pair_force = contacts.touching_pairs(frame)
         walls = contacts.body[rows, 1] < 0
@@ -141,9 +147,9 @@ def test_a_superquadric_brick_turned_a_quarter_about_z_lies_along_y(tmp_path: Pa
     series = write_series(case, trajectory, tmp_path)
     assert series.contacts is None and not list(tmp_path.glob("contacts*"))  # no contacts recorded, no contact series
     assert series.kinds == {"superquadric": 1}
-    mesh = meshio.read(collection(series.bodies)[0][1])
-    triangles, body, kind = body_cells(mesh)
-    assert set(kind) == {KINDS.index("superquadric")} and set(body) == {0}
+    mesh = meshio.read(collection(series.bodies)[0][2])
+    triangles, body = body_cells(mesh, "superquadric")
+    assert set(body) == {0}
     assert len(triangles) == len(case.shape("brick").body(1700.0).surface_mesh(RESOLUTION["superquadric"])[1])
     extent = np.ptp(mesh.points.astype(float), axis=0)
     assert extent == pytest.approx([0.015, 0.031, 0.008], rel=1e-3)  # the long side along y, the width along x
@@ -155,15 +161,16 @@ def test_stride_keeps_every_kth_frame_and_the_last(tmp_path: Path) -> None:
     case, trajectory = superquadric_brick(frames=6)
     series = write_series(case, trajectory, tmp_path, stride=4)
     assert series.frames == [0, 4, 5]
-    assert [(t, p.name) for t, p in collection(series.bodies)] == [(0.0, "bodies_00000.vtu"), (0.04, "bodies_00004.vtu"), (0.05, "bodies_00005.vtu")]
+    assert [(t, p.name) for t, _, p in collection(series.bodies)] == [(0.0, "bodies_superquadric_00000.vtu"), (0.04, "bodies_superquadric_00004.vtu"),
+                                                                      (0.05, "bodies_superquadric_00005.vtu")]
 
 
 def test_a_lost_body_is_left_out_of_its_frames(tmp_path: Path) -> None:
     case, trajectory = superquadric_brick(frames=2)
     trajectory.position[1] = np.nan
     series = write_series(case, trajectory, tmp_path)
-    assert len(meshio.read(tmp_path / "bodies_00000.vtu").points) > 0
-    piece = ET.parse(tmp_path / "bodies_00001.vtu").getroot().find("UnstructuredGrid/Piece")
+    assert len(meshio.read(tmp_path / "bodies_superquadric_00000.vtu").points) > 0
+    piece = ET.parse(tmp_path / "bodies_superquadric_00001.vtu").getroot().find("UnstructuredGrid/Piece")
     assert (piece.get("NumberOfPoints"), piece.get("NumberOfCells")) == ("0", "0") and len(series.frames) == 2
 
 

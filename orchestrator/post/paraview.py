@@ -1,15 +1,17 @@
 """ParaView time series of a run: every body's surface frame by frame, and its recorded contacts.
 
 `write_series(case, trajectory, outdir, stride)` writes into `outdir`
-    bodies.pvd          ParaView's collection: one <DataSet timestep="t (s)" file="…"/> per written frame
-    bodies_FFFFF.vtu    frame F: the surface of every body present, as triangles, one cell block per
-                        body kind present (sphere, clump, superquadric, in that order); point data
-                        `velocity` (m/s, the body's centre velocity at each of its vertices), cell data
-                        `body` (the body's index in results.h5) and `kind` (its index in KINDS). A
-                        .vtu keeps cells, not blocks: its reader (meshio's, ParaView's) joins the
-                        blocks of one cell type, so `kind` is what tells them apart again (ParaView:
-                        Threshold on `kind`). A body lost by the engine (NaN position) is left out
-                        of the frames where it is lost.
+    bodies.pvd          ParaView's collection: per written frame, one <DataSet timestep="t (s)" part="p"
+                        name="kind" file="…"/> per body kind present in the run (sphere, clump,
+                        superquadric: part = its index in KINDS), which ParaView shows as one block per
+                        kind (colour or hide the kinds apart in its Multiblock Inspector)
+    bodies_KIND_FFFFF.vtu   frame F, the bodies of one kind: their surfaces as one `triangle` cell
+                        block (what meshio.read gives back); point data `velocity` (m/s, the body's
+                        centre velocity at each of its vertices), cell data `body` (the body's index
+                        in results.h5) and `kind` (its index in KINDS). A body lost by the engine (NaN
+                        position) is left out of the frames where it is lost (a kind with no body left
+                        is an empty piece). One file per kind because a .vtu keeps cells, not blocks:
+                        its readers (meshio's, ParaView's) join the cells of one type into one block.
     contacts.pvd, contacts_FFFFF.vtu   only when the run recorded contacts (`record_contacts`):
                         `line` cells, one per touching body pair (centre to centre; the |normal force|
                         of its sphere contacts summed, as in post/contacts.force_chains) and one per
@@ -44,7 +46,7 @@ from orchestrator.post.contacts import force_chains
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.shapes.clump import quaternion_matrices, unit_sphere_mesh
 
-KINDS = ("sphere", "clump", "superquadric")  # the order of the cell blocks in a frame
+KINDS = ("sphere", "clump", "superquadric")  # the parts of a frame, in this order
 RESOLUTION = {"sphere": 8, "clump": 8, "superquadric": 12}  # latitudes of a surface mesh, per kind
 BODIES, CONTACTS = "bodies", "contacts"  # the two series' names: NAME.pvd, NAME_FFFFF.vtu
 
@@ -87,11 +89,11 @@ def _rotations(orientation: np.ndarray) -> np.ndarray:
     return quaternion_matrices(np.where(tracked[:, None], orientation, [1.0, 0.0, 0.0, 0.0]))
 
 
-def surfaces(groups: list[BodyGroup], position: np.ndarray, orientation: np.ndarray, velocity: np.ndarray) -> meshio.Mesh:
-    """One frame's surfaces: position (bodies, 3) m, orientation (bodies, 4) (w, x, y, z), velocity
-    (bodies, 3) m/s. Points (Σ B n, 3), one `triangle` cell block per kind present."""
-    points, speeds, blocks, labels = [], [], {}, {}
-    offset = 0
+def surfaces(groups: list[BodyGroup], position: np.ndarray, orientation: np.ndarray, velocity: np.ndarray) -> dict[str, meshio.Mesh]:
+    """One frame's surfaces, one mesh per kind of `groups` (KINDS order): position (bodies, 3) m,
+    orientation (bodies, 4) (w, x, y, z), velocity (bodies, 3) m/s. Each mesh: points (Σ B n, 3), one
+    `triangle` cell block; empty when every body of its kind is lost."""
+    parts: dict[str, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {group.kind: [] for group in groups}
     for group in groups:
         present = np.isfinite(position[group.bodies]).all(axis=1)
         bodies, scale = group.bodies[present], group.scale[present]
@@ -99,18 +101,22 @@ def surfaces(groups: list[BodyGroup], position: np.ndarray, orientation: np.ndar
             continue
         n, m = len(group.vertices), len(group.triangles)
         turned = np.einsum("bij,nj->bni", _rotations(orientation[bodies]), group.vertices) * scale[:, None, None]
-        points.append((position[bodies][:, None, :] + turned).reshape(-1, 3).astype(np.float32))
-        speeds.append(np.repeat(velocity[bodies].astype(np.float32), n, axis=0))
+        offset = sum(len(points) for points, *_ in parts[group.kind])
         starts = (offset + n * np.arange(len(bodies))).astype(np.int32)
-        blocks.setdefault(group.kind, []).append((group.triangles.astype(np.int32)[None, :, :] + starts[:, None, None]).reshape(-1, 3))
-        labels.setdefault(group.kind, []).append(np.repeat(bodies.astype(np.int32), m))
-        offset += n * len(bodies)
-    if not blocks:  # every body lost
+        parts[group.kind].append(((position[bodies][:, None, :] + turned).reshape(-1, 3).astype(np.float32),
+                                  np.repeat(velocity[bodies].astype(np.float32), n, axis=0),
+                                  (group.triangles.astype(np.int32)[None, :, :] + starts[:, None, None]).reshape(-1, 3),
+                                  np.repeat(bodies.astype(np.int32), m)))
+    return {kind: _kind_mesh(kind, pieces) for kind, pieces in parts.items()}
+
+
+def _kind_mesh(kind: str, pieces: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> meshio.Mesh:
+    """The mesh of one kind from its groups' (points, velocity, triangles, body) arrays."""
+    if not pieces:
         return meshio.Mesh(np.empty((0, 3), dtype=np.float32), [])
-    cells = [meshio.CellBlock("triangle", np.concatenate(blocks[kind])) for kind in blocks]
-    return meshio.Mesh(np.concatenate(points), cells, point_data={"velocity": np.concatenate(speeds)},
-                       cell_data={"body": [np.concatenate(labels[kind]) for kind in blocks],
-                                  "kind": [np.full(len(cells[k].data), KINDS.index(kind), dtype=np.int32) for k, kind in enumerate(blocks)]})
+    points, speeds, triangles, labels = (np.concatenate(column) for column in zip(*pieces))
+    return meshio.Mesh(points, [meshio.CellBlock("triangle", triangles)], point_data={"velocity": speeds},
+                       cell_data={"body": [labels], "kind": [np.full(len(triangles), KINDS.index(kind), dtype=np.int32)]})
 
 
 def contact_lines(contacts: Contacts, position: np.ndarray, frame: int) -> meshio.Mesh:
@@ -129,12 +135,14 @@ def contact_lines(contacts: Contacts, position: np.ndarray, frame: int) -> meshi
                        cell_data={"normal_force": [force], "wall": [index.astype(np.int32)]})
 
 
-def write_collection(path: Path, entries: list[tuple[float, str]]) -> Path:
-    """ParaView's collection file: (time s, file name relative to `path`'s folder) per dataset."""
+def write_collection(path: Path, entries: list[tuple[float, str, str]]) -> Path:
+    """ParaView's collection file: (time s, part name, file name relative to `path`'s folder) per
+    dataset; the part number is the name's index in KINDS (0 for a series of one part)."""
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
-    for time, name in entries:
-        ET.SubElement(collection, "DataSet", timestep=repr(float(time)), group="", part="0", file=name)
+    for time, part, name in entries:
+        ET.SubElement(collection, "DataSet", timestep=repr(float(time)), group="", part=str(KINDS.index(part) if part in KINDS else 0),
+                      name=part, file=name)
     ET.indent(root)
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
     return path
@@ -176,15 +184,16 @@ def write_series(case: Case, trajectory: Trajectory, outdir: Path, stride: int =
     frames = sorted({*range(0, trajectory.n_frames, stride), trajectory.n_frames - 1} - {-1})
     outdir.mkdir(parents=True, exist_ok=True)
     recorded = trajectory.contacts
-    written: dict[str, list[tuple[float, str]]] = {BODIES: [], CONTACTS: []}
+    written: dict[str, list[tuple[float, str, str]]] = {BODIES: [], CONTACTS: []}
     for done, frame in enumerate(frames, start=1):
-        meshes = {BODIES: surfaces(groups, trajectory.position[frame], trajectory.orientation[frame], trajectory.velocity[frame])}
+        time = float(trajectory.time[frame])
+        pieces = [(BODIES, kind, f"{BODIES}_{kind}_{frame:05d}.vtu", mesh)
+                  for kind, mesh in surfaces(groups, trajectory.position[frame], trajectory.orientation[frame], trajectory.velocity[frame]).items()]
         if recorded is not None:
-            meshes[CONTACTS] = contact_lines(recorded, trajectory.position, frame)
-        for series, mesh in meshes.items():
-            name = f"{series}_{frame:05d}.vtu"
+            pieces.append((CONTACTS, CONTACTS, f"{CONTACTS}_{frame:05d}.vtu", contact_lines(recorded, trajectory.position, frame)))
+        for series, part, name, mesh in pieces:
             _write_piece(outdir / name, mesh)
-            written[series].append((float(trajectory.time[frame]), name))
+            written[series].append((time, part, name))
         if progress is not None:
             progress(done, len(frames))
     kinds: dict[str, int] = {}
