@@ -177,7 +177,9 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     rerun = run_study(study, tmp_path / "first", packings=packings)
     assert rerun["deposit"] == deposit and rerun["finished_before"] is True
     # Another release (slipperier board) from the same packing: no new packing run, a different flow.
-    slippery = study.model_copy(update={"contacts": study.contacts.model_copy(update={"brick_board": study.contacts.brick_board.model_copy(update={"mu": 0.40})})})
+    # μ 0.25 against 0.46: with μ 0.40 the slipperier board once ended at X_CM 0.094 m against 0.103 m,
+    # after a change of LIGGGHTS' neighbour bins alone; a few bricks scatter by more than that contrast.
+    slippery = study.model_copy(update={"contacts": study.contacts.model_copy(update={"brick_board": study.contacts.brick_board.model_copy(update={"mu": 0.25})})})
     packing_mtime = (packing_dir / RESULTS).stat().st_mtime_ns
     second = run_study(slippery, tmp_path / "second", packings=packings)
     assert second["packing"]["reused"] is True and second["packing"]["directory"] == str(packing_dir)

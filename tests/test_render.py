@@ -20,6 +20,8 @@ from orchestrator.runner import render_case
 
 from orchestrator.parity import sliding_case
 
+from conftest import requires_liggghts
+
 
 @pytest.mark.parametrize("value", [0.1, 1e-17, 123456.789, -2.5e300, 0, 7, "it's \"quoted\"\nnewline", ["a", 1.5], [1, [2, 3]], {"k": None, "b": True}])
 def test_deck_data_round_trips_as_data(value: object) -> None:
@@ -214,3 +216,27 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None
         slides.append(read_results(tmp_path / name / RESULTS))
     assert np.abs(slides[0].position[-1] - slides[0].position[0]).max() > 1e-3  # it did slide
     np.testing.assert_allclose(slides[1].position, slides[0].position, rtol=0.0, atol=1e-12)
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_a_run_from_a_saved_state_has_its_own_domain(tmp_path: Path) -> None:
+    """A release goes further than the packing it starts from: the state's box (LIGGGHTS drops a body
+    that leaves its box) is set to the case's domain. A sphere saved at rest in a 10 cm box falls
+    0.44 m in 0.3 s from it, inside the second case's 2 m domain: it is not lost, and it fell as
+    g t²/2 (no contact; velocity Verlet is exact under a constant force: 1e-6 relative is round-off)."""
+    from orchestrator.results import read_results
+    from orchestrator.runner import run_case
+
+    base = {"name": "state", "engine": "liggghts", "materials": [{"name": "glass", "density": 2500.0}],
+            "contacts": [{"materials": ["glass", "glass"], "en2": 0.5, "mu": 0.3, "kn": 1e4, "kt_over_kn": 0.5}],
+            "bodies": {"spheres": [{"material": "glass", "radius": 0.005, "position": [0.0, 0.0, 0.0]}]}}
+    packing = parse_case({**base, "time": {"duration": 0.01, "output_interval": 0.01}, "gravity": [0.0, 0.0, 0.0], "save_state": True,
+                          "domain": {"lower": [-0.05, -0.05, -0.05], "upper": [0.05, 0.05, 0.05]}})
+    run_case(packing, tmp_path, tmp_path / "packing")
+    release = parse_case({**base, "time": {"duration": 0.3, "output_interval": 0.1}, "initial_state": "packing/state.restart",
+                          "domain": {"lower": [-1.0, -1.0, -1.0], "upper": [1.0, 1.0, 1.0]}})
+    run_case(release, tmp_path, tmp_path / "release")
+    trajectory = read_results(tmp_path / "release" / "results.h5")
+    z, t = trajectory.position[-1, 0, 2], trajectory.time[-1]
+    assert z < -0.05 and z == pytest.approx(-9.81 * t**2 / 2, rel=1e-6)

@@ -239,6 +239,7 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
         "segments": segments,
         "rest": rest_context(plan, segments[-1]["steps"]),
         "initial_state": INITIAL_STATE_NAME if case.initial_state else "",
+        "box": [(float(lo), float(hi)) for lo, hi in zip(plan.domain.lower, plan.domain.upper)],
         "save_state": case.save_state,
         "state_file": STATE_NAME,
     }
