@@ -16,7 +16,8 @@ from orchestrator.engines.yade.materials import series, split_in_series
 from orchestrator.physics import pair_constants
 from orchestrator.engines.templating import data_literal, environment
 from orchestrator.validation import with_engine
-from orchestrator.runner import render_case
+from orchestrator.results import read_results
+from orchestrator.runner import render_case, run_case
 
 from orchestrator.parity import sliding_case
 
@@ -225,9 +226,6 @@ def test_a_run_from_a_saved_state_has_its_own_domain(tmp_path: Path) -> None:
     that leaves its box) is set to the case's domain. A sphere saved at rest in a 10 cm box falls
     0.44 m in 0.3 s from it, inside the second case's 2 m domain: it is not lost, and it fell as
     g t²/2 (no contact; velocity Verlet is exact under a constant force: 1e-6 relative is round-off)."""
-    from orchestrator.results import read_results
-    from orchestrator.runner import run_case
-
     base = {"name": "state", "engine": "liggghts", "materials": [{"name": "glass", "density": 2500.0}],
             "contacts": [{"materials": ["glass", "glass"], "en2": 0.5, "mu": 0.3, "kn": 1e4, "kt_over_kn": 0.5}],
             "bodies": {"spheres": [{"material": "glass", "radius": 0.005, "position": [0.0, 0.0, 0.0]}]}}

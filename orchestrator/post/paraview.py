@@ -135,14 +135,13 @@ def contact_lines(contacts: Contacts, position: np.ndarray, frame: int) -> meshi
                        cell_data={"normal_force": [force], "wall": [index.astype(np.int32)]})
 
 
-def write_collection(path: Path, entries: list[tuple[float, str, str]]) -> Path:
-    """ParaView's collection file: (time s, part name, file name relative to `path`'s folder) per
-    dataset; the part number is the name's index in KINDS (0 for a series of one part)."""
+def write_collection(path: Path, entries: list[tuple[float, int, str, str]]) -> Path:
+    """ParaView's collection file: (time s, part number, part name, file name relative to `path`'s
+    folder) per dataset."""
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
-    for time, part, name in entries:
-        ET.SubElement(collection, "DataSet", timestep=repr(float(time)), group="", part=str(KINDS.index(part) if part in KINDS else 0),
-                      name=part, file=name)
+    for time, part, name, file in entries:
+        ET.SubElement(collection, "DataSet", timestep=repr(float(time)), group="", part=str(part), name=name, file=file)
     ET.indent(root)
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
     return path
@@ -184,16 +183,16 @@ def write_series(case: Case, trajectory: Trajectory, outdir: Path, stride: int =
     frames = sorted({*range(0, trajectory.n_frames, stride), trajectory.n_frames - 1} - {-1})
     outdir.mkdir(parents=True, exist_ok=True)
     recorded = trajectory.contacts
-    written: dict[str, list[tuple[float, str, str]]] = {BODIES: [], CONTACTS: []}
+    written: dict[str, list[tuple[float, int, str, str]]] = {BODIES: [], CONTACTS: []}
     for done, frame in enumerate(frames, start=1):
         time = float(trajectory.time[frame])
-        pieces = [(BODIES, kind, f"{BODIES}_{kind}_{frame:05d}.vtu", mesh)
+        pieces = [(BODIES, KINDS.index(kind), kind, f"{BODIES}_{kind}_{frame:05d}.vtu", mesh)
                   for kind, mesh in surfaces(groups, trajectory.position[frame], trajectory.orientation[frame], trajectory.velocity[frame]).items()]
         if recorded is not None:
-            pieces.append((CONTACTS, CONTACTS, f"{CONTACTS}_{frame:05d}.vtu", contact_lines(recorded, trajectory.position, frame)))
-        for series, part, name, mesh in pieces:
-            _write_piece(outdir / name, mesh)
-            written[series].append((time, part, name))
+            pieces.append((CONTACTS, 0, CONTACTS, f"{CONTACTS}_{frame:05d}.vtu", contact_lines(recorded, trajectory.position, frame)))
+        for series, part, name, file, mesh in pieces:
+            _write_piece(outdir / file, mesh)
+            written[series].append((time, part, name, file))
         if progress is not None:
             progress(done, len(frames))
     kinds: dict[str, int] = {}
