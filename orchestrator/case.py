@@ -158,6 +158,11 @@ class Case(EngineSections, Strict):
     bodies: Bodies
     walls: list[Wall] = []
     domain: Domain | None = None
+    # What a body leaving `domain` does to the run. "error" (default): the run fails, naming the bodies
+    # and when they left (a domain too small, a body thrown out by a bad step). "drop": the run goes on
+    # without them; each lost body's state is NaN from the first frame it is out, on every engine,
+    # and the run record lists them (bricks falling off the edge of a board, say).
+    lost_bodies: Literal["error", "drop"] = "error"
     # Write the engine's whole state at the end (LIGGGHTS: `state.restart`, contact history included),
     # so a later case can start from it: a settled packing feeding many releases, say.
     save_state: bool = False

@@ -23,7 +23,7 @@ from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, lo
 from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
-from orchestrator.post.lost import lost_bodies
+from orchestrator.post.lost import drop_lost, lost_bodies
 from orchestrator.results import Trajectory, write_results
 
 RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
@@ -113,7 +113,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     try:
         adapter.execute(plan, directory, progress=progress, timeout=timeout)
         trajectory = adapter.read_output(plan, directory)
-        check_inside(plan, trajectory, deck)
+        lost = check_inside(plan, trajectory, deck)
     except EngineError as error:
         record.update(status="failed", error=error.summary, log_tail=error.tail, wall_time_s=time.perf_counter() - started)
         rundir.write_record(directory, record)
@@ -130,6 +130,8 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         bodies=trajectory.n_bodies,
         metrics=summary.summary(trajectory),
     )
+    if lost:
+        record.update(lost_bodies=lost["lost_bodies"], warnings=[*record.get("warnings", []), lost["warning"]])
     rundir.write_record(directory, record)
     if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
         for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
@@ -173,13 +175,19 @@ def _segments(plan: RunPlan, directory: Path) -> list[dict[str, Any]]:
     return segments + [{"segment": resume.segment, "started": rundir.now(), "from_time_s": resume.step * dt}]
 
 
-def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> None:
+def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> dict[str, Any]:
     """Every engine ends a run whose bodies left the domain the same way (LIGGGHTS drops such bodies,
-    YADE and cocd would carry them on): an EngineError counting them by one rule (post.lost)."""
+    YADE and cocd would carry them on), counting them by one rule (post.lost): an EngineError, or with
+    the case's `lost_bodies: drop` their states NaN from then on and the record's entries (lost
+    bodies, a warning) returned."""
     lost = lost_bodies(trajectory, plan.domain.lower, plan.domain.upper)
+    if len(lost) and plan.case.lost_bodies == "drop":
+        drop_lost(trajectory, lost)
+        return {"lost_bodies": lost.as_records(), "warning": lost.message("dropped from then on (lost_bodies: drop)")}
     if len(lost):
         log = deck.parent / checkpoint.segment_name(LOG_NAME, plan.segment)
         raise EngineError(lost.message(), deck, log, log_tail(log)[-TAIL_LINES:])
+    return {}
 
 
 def ensure_run(

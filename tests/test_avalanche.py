@@ -13,6 +13,7 @@ from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import read_results
 from orchestrator.runner import RESULTS, run_case
+from orchestrator.rundir import saved_case
 
 from conftest import engine_params, tiny_study
 
@@ -173,6 +174,9 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     packing_dir = Path(report["packing"]["directory"])
     packed = read_results(packing_dir / RESULTS)
     np.testing.assert_allclose(trajectory.position[0], packed.position[-1], rtol=0, atol=1e-9)
+    # A brick may fall off a board's edge in a release (counted, not an error); never out of the box.
+    assert saved_case(tmp_path / "first" / "run").lost_bodies == "drop" and saved_case(packing_dir).lost_bodies == "error"
+    assert deposit["bodies_lost"] == 0
     # Rerunning reuses the packing and the release: nothing new is computed.
     rerun = run_study(study, tmp_path / "first", packings=packings)
     assert rerun["deposit"] == deposit and rerun["finished_before"] is True

@@ -13,8 +13,8 @@ from orchestrator.case import parse_case
 from orchestrator.engines import EngineError
 from orchestrator.post.deposit import deposit_metrics
 from orchestrator.post.lost import NoBodyLeft, lost_bodies
-from orchestrator.results import Trajectory, write_results
-from orchestrator.runner import run_case
+from orchestrator.results import Trajectory, read_results, write_results
+from orchestrator.runner import RESULTS, run_case
 
 from conftest import assert_one_line_error, run_cli
 
@@ -45,6 +45,29 @@ def test_three_spheres_leaving_are_counted_alike_with_their_times(engine: str, t
     for body, speed in enumerate(SPEEDS):  # the first frame found outside: within one output interval after the crossing
         crossing = HALF_WIDTH / speed
         assert crossing <= left[body] + 1e-9 <= crossing + INTERVAL + 1e-6, (body, left[body], crossing)
+
+
+@pytest.mark.engine
+@pytest.mark.parametrize("engine", ["liggghts", "yade", "cocd"])
+def test_with_lost_bodies_drop_the_run_completes_without_them(engine: str, tmp_path: Path) -> None:
+    """`lost_bodies: drop` (bricks falling off a board's edge): the run completes, its record lists the
+    three bodies with the times the error gives, their states are NaN from those frames on every engine,
+    and a fourth sphere at rest is untouched."""
+    data = three_leaving(engine)
+    data["bodies"]["spheres"].append({"material": "glass", "radius": 0.004, "position": [-0.03, 0.03, 0.0]})
+    record = run_case(parse_case({**data, "lost_bodies": "drop"}), tmp_path, tmp_path / "run")
+    assert record["status"] == "completed"
+    left = {entry["body"]: entry["time_s"] for entry in record["lost_bodies"]}
+    assert sorted(left) == [0, 1, 2], record["lost_bodies"]
+    assert any(w.startswith("3 bodies left the simulation domain") and "dropped from then on" in w for w in record["warnings"])
+    result = read_results(tmp_path / "run" / RESULTS)
+    for body, speed in enumerate(SPEEDS):
+        crossing = HALF_WIDTH / speed
+        assert crossing <= left[body] + 1e-9 <= crossing + INTERVAL + 1e-6, (body, left[body], crossing)
+        gone = result.time >= left[body] - 1e-12
+        assert np.isnan(result.position[gone, body]).all() and np.isnan(result.velocity[gone, body]).all()
+        assert np.isfinite(result.position[~gone, body]).all()
+    assert np.allclose(result.position[:, 3], [-0.03, 0.03, 0.0], atol=1e-12), "the sphere at rest stays"
 
 
 def trajectory(position: np.ndarray) -> Trajectory:

@@ -48,6 +48,7 @@ class DepositMetrics:
     bodies_in_deposit: int
     outliers: int
     bodies_on_slope: int = 0  # centres upslope of the toe (x < 0)
+    bodies_lost: int = 0  # left the simulation domain (off a board's edge, say): in no other figure
 
     def as_dict(self) -> dict[str, float]:
         return {key: float(value) for key, value in asdict(self).items()}
@@ -114,6 +115,7 @@ def deposit_metrics(
         bodies_in_deposit=int(keep.sum()),
         outliers=int(present.sum() - keep.sum()),
         bodies_on_slope=int((x[present] < 0.0).sum()),
+        bodies_lost=int((~present).sum()),
     )
 
 

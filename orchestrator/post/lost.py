@@ -27,15 +27,19 @@ class Lost:
     def __len__(self) -> int:
         return len(self.bodies)
 
-    def message(self) -> str:
-        """One line: how many bodies left the domain, which and when; empty when none did."""
+    def message(self, advice: str = "enlarge `domain:` in the case") -> str:
+        """One line: how many bodies left the domain, which and when, then `advice`; empty when none did."""
         count = len(self)
         if not count:
             return ""
         which = ", ".join(f"{int(b)} at t = {t:.4g} s" for b, t in zip(self.bodies[:SHOWN], self.times[:SHOWN]))
         more = f" and {count - SHOWN} more" if count > SHOWN else ""
         return (f"{count} {plural(count, 'body', 'bodies')} left the simulation domain "
-                f"({plural(count, 'body', 'bodies')} {which}{more}); enlarge `domain:` in the case")
+                f"({plural(count, 'body', 'bodies')} {which}{more}); {advice}")
+
+    def as_records(self) -> list[dict[str, float]]:
+        """[{"body": index, "time_s": when it left}] in the order they left, for a run record."""
+        return [{"body": int(b), "time_s": float(t)} for b, t in zip(self.bodies, self.times)]
 
 
 def plural(count: int, one: str, many: str) -> str:
@@ -54,6 +58,15 @@ def lost_bodies(trajectory: Trajectory, lower: tuple[float, ...] | None = None, 
     first = gone[:, bodies].argmax(axis=0)
     order = np.argsort(first, kind="stable")
     return Lost(bodies=bodies[order], times=np.asarray(trajectory.time)[first[order]])
+
+
+def drop_lost(trajectory: Trajectory, lost: Lost) -> None:
+    """Make each lost body's state NaN from the first frame it is lost, in place (YADE and cocd carry
+    a body on outside the domain; LIGGGHTS already dropped it), so every engine's result reads alike."""
+    frames = np.searchsorted(np.asarray(trajectory.time), lost.times)
+    for body, first in zip(lost.bodies, frames):
+        for states in (trajectory.position, trajectory.velocity, trajectory.angular_velocity, trajectory.orientation):
+            states[first:, body] = np.nan
 
 
 class NoBodyLeft(ValueError):

@@ -49,6 +49,7 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any]) -> list[t
         ("φ_app (°)", deposit["fahrboschung_deg"], "", ""),
         ("outlier bricks", deposit["outliers"], "", ""),
         ("bricks left on the slope", deposit.get("bodies_on_slope", float("nan")), "", ""),
+        ("bricks off the boards (lost)", deposit.get("bodies_lost", float("nan")), "", ""),
         ("front max speed (m/s)", report["front"]["max_velocity"], "", ""),
         ("front final position (m)", report["front"]["final_position"], "", ""),
     ]
