@@ -52,7 +52,6 @@ from orchestrator.runner import RESULTS, run_case  # noqa: E402
 
 FULL_SCALE = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
 HORIZONTAL = REPO / "cases" / "collapse" / "horizontal.yaml"
-LIGGGHTS_LOOP = re.compile(r"^Loop time of (\S+) on \d+ procs for (\d+) steps", re.MULTILINE)
 YADE_LOOP = re.compile(r"^DEMORCH_LOOP_SECONDS (\S+) steps (\d+)", re.MULTILINE)
 
 
@@ -76,7 +75,7 @@ def flow_study(bricks: int, engine: str, layout: tuple[int, int, int], law: str,
 def loop_time(rundir: Path, engine: str) -> tuple[float, int]:
     """(seconds, steps) of the engine's own time loop in a finished run."""
     if engine == "liggghts":
-        runs = LIGGGHTS_LOOP.findall((rundir / "log.liggghts").read_text())
+        runs = liggghts.loop_times((rundir / "log.liggghts").read_text())
     else:
         runs = YADE_LOOP.findall((rundir / "engine.log").read_text())
     if not runs:

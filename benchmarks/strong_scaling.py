@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import re
 import sys
 from pathlib import Path
 
@@ -30,11 +29,11 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from orchestrator.engines import RunOptions  # noqa: E402
+from orchestrator.engines.liggghts import adapter as liggghts  # noqa: E402
 from orchestrator.studies.avalanche.study import KIND, load_study, run_study  # noqa: E402
 
 STUDY = REPO / "cases" / "avalanche" / "random_pour_quarter.yaml"
 RESULT = Path(os.environ.get("BENCH_RESULT", REPO / "docs" / "benchmarks" / "strong_scaling.json"))
-LOOP = re.compile(r"^Loop time of (\S+) on (\d+) procs for (\d+) steps", re.MULTILINE)
 PHASES = {"start (first tenth)": (0.0, 0.1), "flow": (0.1, 0.9), "end (last tenth)": (0.9, 1.0), "whole release": (0.0, 1.0)}
 
 
@@ -42,7 +41,7 @@ def loop_times(rundir: Path) -> list[tuple[float, int]]:
     """(seconds, steps) of each time loop of a finished LIGGGHTS run, in order, over all its logs."""
     loops: list[tuple[float, int]] = []
     for log in sorted(rundir.glob("log.liggghts*")):
-        loops += [(float(seconds), int(steps)) for seconds, _, steps in LOOP.findall(log.read_text())]
+        loops += liggghts.loop_times(log.read_text())
     return [loop for loop in loops if loop[1] > 0]
 
 

@@ -26,6 +26,7 @@ from orchestrator.case import Case, CaseError, parse_case
 from orchestrator.engines import RunOptions, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.checkpoint import Resume, merge, next_segment, segment_files, segment_name
+from orchestrator.engines.liggghts import adapter as liggghts_adapter
 from orchestrator.engines.options import CHECKPOINT_ENV
 from orchestrator.results import read_results
 from orchestrator.plan import RunPlan, make_plan
@@ -373,3 +374,11 @@ def test_writing_checkpoints_leaves_the_run_unchanged(engine: str, law: str, tmp
         adapter.execute(plan, directory)
         runs.append(adapter.read_output(plan, directory))
     assert np.array_equal(runs[0].position, runs[1].position) and np.array_equal(runs[0].velocity, runs[1].velocity)
+
+
+def test_liggghts_loop_times_are_read_per_sub_run_set_ups_included() -> None:
+    """The benchmarks' engine cost: every "Loop time" line of a log, in order (a zero-step set-up too)."""
+    log = ("Loop time of 2.82689 on 2 procs for 805 steps with 1921 atoms, finish time Wed Dec  2 06:07:06 2026\n"
+           "  16100     1921      7.8964854\n"
+           "Loop time of 1.427e-06 on 1 procs for 0 steps with 1920 atoms, finish time Wed Dec  2 06:22:31 2026\n")
+    assert liggghts_adapter.loop_times(log) == [(2.82689, 805), (1.427e-06, 0)]

@@ -19,10 +19,12 @@ SHOWN = 5  # bodies named in a message; the rest are counted
 
 @dataclass(frozen=True)
 class Lost:
-    """The lost bodies (indices into the Trajectory, in the order they left) and when each left (s)."""
+    """The lost bodies (indices into the Trajectory, in the order they left), when each left (s) and
+    the index of that first frame."""
 
     bodies: np.ndarray
     times: np.ndarray
+    frames: np.ndarray
 
     def __len__(self) -> int:
         return len(self.bodies)
@@ -57,14 +59,13 @@ def lost_bodies(trajectory: Trajectory, lower: tuple[float, ...] | None = None, 
     bodies = np.flatnonzero(gone.any(axis=0))
     first = gone[:, bodies].argmax(axis=0)
     order = np.argsort(first, kind="stable")
-    return Lost(bodies=bodies[order], times=np.asarray(trajectory.time)[first[order]])
+    return Lost(bodies=bodies[order], times=np.asarray(trajectory.time)[first[order]], frames=first[order])
 
 
 def drop_lost(trajectory: Trajectory, lost: Lost) -> None:
     """Make each lost body's state NaN from the first frame it is lost, in place (YADE and cocd carry
     a body on outside the domain; LIGGGHTS already dropped it), so every engine's result reads alike."""
-    frames = np.searchsorted(np.asarray(trajectory.time), lost.times)
-    for body, first in zip(lost.bodies, frames):
+    for body, first in zip(lost.bodies, lost.frames):
         for states in (trajectory.position, trajectory.velocity, trajectory.angular_velocity, trajectory.orientation):
             states[first:, body] = np.nan
 

@@ -29,6 +29,15 @@ from orchestrator.engines.base import LOG_NAME, AdapterDefaults, EngineError, En
 _THERMO_LINE = re.compile(r"^\s*(\d+)\s+(\d+)\s+(\S+)(?:\s+\S+)*\s*$")  # step atoms ke [rest sums]
 
 
+_LOOP_LINE = re.compile(r"^Loop time of (\S+) on \d+ procs for (\d+) steps", re.MULTILINE)
+
+
+def loop_times(log: str) -> list[tuple[float, int]]:
+    """(seconds, steps) of each time loop LIGGGHTS reports in a log's text ("Loop time of …"), in
+    order, the zero-step set-ups included: the engine's own cost, without start-up and set-ups."""
+    return [(float(seconds), int(steps)) for seconds, steps in _LOOP_LINE.findall(log)]
+
+
 class ThermoWatcher:
     """Reads thermo lines (step atoms ke): simulated time for progress and the last step; calls
     on_step(step) at each (the adapter seals and prunes its checkpoints there). Lost bodies are
