@@ -11,10 +11,14 @@ from orchestrator.fields import AngularVelocity, Name, Position, QuaternionPart,
 from orchestrator.shapes import KINDS, BodyShape, make_shape
 from orchestrator.shapes.clump import BrickClump
 
+# m: the smallest length of any body (a sphere's radius, a brick's sides and rounding, a clump's
+# spheres): a smaller body's mass and inertia underflow in the engines, and it falls through its support.
+MIN_SIZE = 1e-6
+
 
 class Sphere(Strict):
     material: Name
-    radius: Real(unit="m", ge=1e-6, le=10.0)  # from a micron: a smaller body's mass and inertia underflow in the engines
+    radius: Real(unit="m", ge=MIN_SIZE, le=10.0)
     position: Position
     velocity: Velocity = (0.0, 0.0, 0.0)
     angular_velocity: AngularVelocity = (0.0, 0.0, 0.0)
@@ -38,16 +42,16 @@ class BrickShape(Strict):
 
     name: Name
     kind: ShapeKind = "clump"
-    length: Real(unit="m", gt=0.0, le=10.0)
-    width: Real(unit="m", gt=0.0, le=10.0)
-    thickness: Real(unit="m", gt=0.0, le=10.0)
+    length: Real(unit="m", ge=MIN_SIZE, le=10.0)
+    width: Real(unit="m", ge=MIN_SIZE, le=10.0)
+    thickness: Real(unit="m", ge=MIN_SIZE, le=10.0)
     layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
     bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0
     # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
     # thickness axes) when given; default: those of the (rounded) box at the material's density.
     mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
     inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
-    # Edges and corners rounded at this radius (m): eight corner spheres join the layout (shapes/clump.py).
+    # Edges and corners rounded at this radius (m; 0, or from MIN_SIZE): eight corner spheres join the layout (shapes/clump.py).
     # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
     rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
     # Superquadric only: the exponents (n1 across the thickness, n2 in the length-width plane); 2 is
@@ -59,8 +63,17 @@ class BrickShape(Strict):
         if self.kind != "clump" and self.bevel_deg:
             raise ValueError(f"bevel_deg: a {self.kind} brick has no bevelled faces; allowed: 0, or kind: clump (got {self.bevel_deg!r})")
         limit = min(self.length, self.width, self.thickness) / 2.0
-        if self.rounding and (self.bevel_deg or self.rounding >= limit):
-            raise ValueError(f"rounding: needs bevel_deg 0; allowed range: [0, {limit:g}) (got {self.rounding!r})")
+        if self.rounding and self.bevel_deg:
+            raise ValueError(f"rounding: needs bevel_deg 0 (a brick bevelled by {self.bevel_deg!r}° has no rounded edges); "
+                             f"allowed: 0 (got {self.rounding!r})")
+        if self.rounding and not MIN_SIZE <= self.rounding < limit:
+            raise ValueError(f"rounding: allowed: 0, or [{MIN_SIZE:g}, {limit:g}) m (below half the smallest side) (got {self.rounding!r})")
+        if self.kind == "clump":
+            smallest = float(self.body(1.0).radii.min())  # thickness / (2 layout[2]), less INSET × rounding; thinner at a bevel's end
+            if smallest < MIN_SIZE:
+                raise ValueError(f"layout: the clump's smallest sphere would be {smallest:.3g} m in radius; allowed: at least {MIN_SIZE:g} m "
+                                 f"(fewer spheres across the thickness{', less rounding' if self.rounding else ''}"
+                                 f"{', a smaller bevel' if self.bevel_deg else ''}) (got {list(self.layout)})")
         if self.inertia is not None:
             a, b, c = sorted(self.inertia)
             if c > a + b:

@@ -31,6 +31,7 @@ class Capabilities:
     state_file: the file `save_state` writes in the run directory (None: no restart file).
     contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
     shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric).
+    mixed_kinds: bodies of several of those kinds in one case (a clump beside a superquadric).
     glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
     preferred_brick: the kind of brick the avalanche studies use on it unless told (chosen by
         measurement: docs/bricks.md).
@@ -47,6 +48,7 @@ class Capabilities:
     state_file: str | None = None
     contact_output: bool = False
     shape_kinds: tuple[str, ...] = ("clump",)
+    mixed_kinds: bool = False
     glued_kinds: tuple[str, ...] = ()
     preferred_brick: str = "clump"
 

@@ -7,6 +7,8 @@ field's path in the message, before any engine process starts.
 from __future__ import annotations
 
 import math
+import re
+from collections.abc import Mapping
 from enum import Enum
 from pathlib import Path
 from typing import Annotated, Literal, Union
@@ -280,6 +282,10 @@ def engine_limits(case: Case) -> str | None:
         if shape.kind in used_kinds and shape.kind not in can.shape_kinds:
             able = [name for name in ENGINE_NAMES if shape.kind in capabilities(name).shape_kinds]
             return f"shapes.{i}.kind: {engine} takes {', '.join(can.shape_kinds)} bodies, not {shape.kind}; engines that can: {', '.join(able)}"
+    if len(used_kinds) > 1 and not can.mixed_kinds:  # LIGGGHTS runs a case either as multisphere clumps or as superquadrics
+        able = [name for name in ENGINE_NAMES if capabilities(name).mixed_kinds and used_kinds <= set(capabilities(name).shape_kinds)]
+        return (f"shapes: {engine} takes bodies of one kind per case ({' or '.join(can.shape_kinds)}), not {' and '.join(sorted(used_kinds))} "
+                f"together; give every shape one kind; engines that can mix kinds: {', '.join(able) or 'none'}")
     glued = {case.shape(c.shape).kind for c in case.bodies.clumps if c.fixed}
     for kind in sorted(glued - set(can.glued_kinds)):
         able = [name for name in ENGINE_NAMES if kind in capabilities(name).glued_kinds]
@@ -287,11 +293,23 @@ def engine_limits(case: Case) -> str | None:
     return None
 
 
-def parse_case(data: object, source: str = "case") -> Case:
-    """Validate a mapping (from YAML or code) into a Case, raising CaseError with a one-line message."""
+def parse_case(data: object, source: str = "case", fields: Mapping[str, str] | None = None) -> Case:
+    """Validate a mapping (from YAML or code) into a Case, raising CaseError with a one-line message.
+
+    fields: for a case made from another file (a study), the names that file gives the case's fields,
+    so that the message names what its user wrote: {"shapes.0": "brick"} turns `shapes.0.kind` into
+    `brick.kind` (a field path is renamed whole, never inside a longer one)."""
     if not isinstance(data, dict):
         raise CaseError(f"{source}: the case must be a mapping of fields, got {type(data).__name__}")
-    return parse_model(Case, data, source)
+    try:
+        return parse_model(Case, data, source)
+    except CaseError as error:
+        if not fields:
+            raise
+        message = str(error)
+        for case_field, name in fields.items():
+            message = re.sub(rf"(?<![\w.]){re.escape(case_field)}(?![\w])", name, message)
+        raise CaseError(message) from None
 
 
 def load_case(path: str | Path) -> Case:

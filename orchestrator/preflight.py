@@ -5,11 +5,13 @@ do instead:
 - the time step, given or automatic, within (0, MAX_STEP] and at most MAX_STEPS steps; against the
   shortest contact duration: an explicit engine needs several steps per contact (MAX_STEP_FRACTION),
   or contacts are skipped and bodies leave at any speed;
-- initial speeds against the step: a body may cross at most a tenth of the smallest radius per step;
+- initial speeds against the step: no point of a body (its spin's surface speed included) may cross
+  more than a tenth of the smallest radius per step;
 - the output: frame count and results size (contacts included), capped (MAX_FRAMES, MAX_RESULTS_BYTES);
   what the machine can hold is checked where the run directory is known (estimate.check_machine);
 - the geometry: spheres overlapping each other (coincident ones included), spheres cut by a wall,
-  bodies outside an explicit domain;
+  shaped bodies (clumps, superquadrics) overlapping or cut by a wall (preflight_shapes), bodies
+  outside an explicit domain;
 - the initial state: a state file the engine wrote (`save_state`) for a completed run.
 """
 
@@ -25,6 +27,7 @@ from orchestrator import physics
 from orchestrator.case import Case, CaseError
 from orchestrator.estimate import OutputEstimate
 from orchestrator.capabilities import capabilities
+from orchestrator.preflight_shapes import check_shaped_bodies
 from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
@@ -93,15 +96,25 @@ def check_output(case: Case, output: OutputEstimate) -> None:
 
 
 def check_speeds(case: Case, dt: float, table: Sequence[physics.BodyInfo]) -> None:
+    """No point of a body's surface may cross more than MAX_TRAVEL_PER_STEP of the smallest radius in
+    one step: its speed is at most |v| + |ω| × its bounding radius (the spin's surface speed)."""
     if capabilities(case.engine).implicit:  # contact dynamics finds contacts over the whole step
         return
     smallest = min(b.radius for b in table)
-    for index, body in enumerate(table):
+    allowed = MAX_TRAVEL_PER_STEP * smallest / dt  # m/s
+    spins = [s.angular_velocity for s in case.bodies.spheres] + [c.angular_velocity for c in case.bodies.clumps]  # table order
+    for index, (body, omega) in enumerate(zip(table, spins)):
         speed = float(np.linalg.norm(body.velocity))
+        spin = float(np.linalg.norm(omega))
         if speed * dt > MAX_TRAVEL_PER_STEP * smallest:
             raise CaseError(f"{_body_field(case, index)}.velocity: {speed:.3g} m/s crosses {speed * dt:.3g} m per step, more than "
-                            f"{MAX_TRAVEL_PER_STEP:g} of the smallest radius ({smallest:.3g} m); allowed: at most "
-                            f"{MAX_TRAVEL_PER_STEP * smallest / dt:.3g} m/s at this step")
+                            f"{MAX_TRAVEL_PER_STEP:g} of the smallest radius ({smallest:.3g} m); allowed: at most {allowed:.3g} m/s at this step")
+        surface = speed + spin * body.radius
+        if surface * dt > MAX_TRAVEL_PER_STEP * smallest:
+            raise CaseError(f"{_body_field(case, index)}.angular_velocity: {spin:.3g} rad/s moves the surface at up to {surface:.3g} m/s "
+                            f"(|v| + |ω| × the bounding radius, {body.radius:.3g} m), crossing {surface * dt:.3g} m per step, more than "
+                            f"{MAX_TRAVEL_PER_STEP:g} of the smallest radius ({smallest:.3g} m); allowed: |ω| at most "
+                            f"{(allowed - speed) / body.radius:.3g} rad/s at this step")
 
 
 def check_geometry(case: Case, table: Sequence[physics.BodyInfo], wall_triangles: Sequence[np.ndarray]) -> None:
@@ -117,6 +130,7 @@ def check_geometry(case: Case, table: Sequence[physics.BodyInfo], wall_triangles
             if gaps[worst] < -OVERLAP_TOLERANCE * radii[worst]:
                 raise CaseError(f"bodies.spheres.{worst}.position: the sphere cuts wall {wall.name!r} by {-gaps[worst]:.3g} m; "
                                 "move it off the wall (a sphere may touch a wall, not cross it)")
+    check_shaped_bodies(case, wall_triangles)
     if case.domain is not None:
         lower, upper = np.asarray(case.domain.lower), np.asarray(case.domain.upper)
         for index, body in enumerate(table):

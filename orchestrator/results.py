@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -64,6 +65,25 @@ def read_json(path: Path) -> dict | None:
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None
+
+def safe_output_path(directory: Path, name: str) -> Path:
+    """`directory / name`, made safe to write through: a writer opens it by name and would follow a
+    symbolic link there (out of `directory`, overwriting its target) or write into a file hard-linked
+    elsewhere (or block on a FIFO), so such an entry is removed first and the writer makes a new file
+    (or directory) in its place. A regular file or a directory of its own stays. ValueError for a name that is not one entry
+    of `directory` (a path, `..`)."""
+    if not name or name in (".", "..") or Path(name).name != name:
+        raise ValueError(f"{name!r} is not a file name")
+    path = directory / name
+    try:
+        status = os.lstat(path)
+    except FileNotFoundError:
+        return path
+    single_file = stat.S_ISREG(status.st_mode) and status.st_nlink == 1
+    if not (single_file or stat.S_ISDIR(status.st_mode)):  # a link of either kind, a FIFO, a socket, a device
+        path.unlink()
+    return path
+
 
 # dataset → (dtype kind, rank): f float, i integer, S bytes
 LAYOUT: dict[str, tuple[str, int]] = {

@@ -15,7 +15,11 @@ the same id; an edited mesh, brick or template gives another. Layout of a run di
     results.h5  the frames (case runs; a study run's record points at its release's)
 
 Reading a run back checks case.json against the recorded id, and the recorded build against the
-current one: a run whose inputs or build changed is `stale`, never `completed`.
+current one: a run whose inputs or build changed is `stale`, never `completed`. A content-addressed
+directory (a campaign point, a shared packing: named by its run id) must also hold the run of that
+id, and a completed run's outputs are sealed (`sealed`: the sha256 of its results and saved state,
+verified on reuse): a run whose files were edited or damaged since it completed is `stale` too.
+One rule, `why_stale`, says why a stored run may not stand for today's inputs.
 """
 
 from __future__ import annotations
@@ -194,13 +198,15 @@ def results_readable(path: Path) -> bool:
         return False
 
 
-def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: bool = True, held: bool = False) -> str:
+def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: bool = True, held: bool = False,
+           expected_id: str | None = None) -> str:
     """pending | running | completed | failed | stale | incomplete.
 
-    running: a process holds the lock. completed: the record says so, the results read back, its
-    case.json (an `inputs_model`: a Case, or a study) hashes to its id, and (check_build) its build
-    is the current one; a completed run that fails the last two checks is stale. incomplete: its
-    process died before it finished. held: the caller holds the lock (so do not probe it).
+    running: a process holds the lock. completed: the record says so, the results read back and
+    `why_stale` finds nothing (its case.json hashes to its id with today's build, its sealed
+    outputs are intact, and its id is `expected_id` when the directory stands for one); a completed
+    run that fails those checks is stale. incomplete: its process died before it finished. held: the
+    caller holds the lock (so do not probe it).
     """
     if not held and is_locked(directory):
         return "running"
@@ -213,22 +219,39 @@ def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: b
         return "failed"
     if record.get("status") != "completed" or not results_readable(directory / str(record.get("results", RESULTS))):
         return "incomplete"
-    return "completed" if current(directory, record, inputs_model, check_build) else "stale"
+    return "completed" if why_stale(directory, record, inputs_model, check_build, expected_id) is None else "stale"
 
 
-def current(directory: Path, record: dict[str, Any], inputs_model: type[BaseModel] = Case, check_build: bool = True) -> bool:
-    """The saved inputs hash to the recorded id with the recorded build, and that build is today's."""
+def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseModel] = Case, check_build: bool = True,
+              expected_id: str | None = None) -> str | None:
+    """None when the completed run in `directory` may stand for its inputs today; else why not, in a
+    few words: its saved inputs do not hash to its recorded id with its recorded build, its id is
+    not `expected_id` (the id its directory stands for), a sealed output changed, or (check_build)
+    its build is not today's."""
     build = record.get("build")
     if "run_id" not in record or not isinstance(build, dict):
-        return False
+        return "its record has no run id or build"
+    if expected_id is not None and record["run_id"] != expected_id:
+        return f"it holds the run {record['run_id']}, not the {expected_id} its directory stands for"
     try:
         inputs = inputs_model.model_validate_json((directory / CASE_COPY).read_text())
     except (ValueError, OSError):
-        return False
+        return f"its {CASE_COPY} does not read back"
     files = record.get("files", {})
     if not isinstance(files, dict) or run_id(inputs, build, files=files) != record["run_id"]:
-        return False
-    return not check_build or build == build_stamp(str(build.get("engine", "")))
+        return f"its {CASE_COPY} does not hash to its run id"
+    broken = [name for name, value in (record.get("sealed") or {}).items() if _file_digest(directory / name) != value]
+    if broken:
+        return f"{', '.join(broken)} changed since it was sealed"
+    if check_build and build != build_stamp(str(build.get("engine", ""))):
+        return "it was made by another build"
+    return None
+
+
+def seal_outputs(directory: Path, names: list[str]) -> dict[str, str]:
+    """name → sha256 of each output a completed run keeps (its results, its saved state): the record's
+    `sealed`, checked by `why_stale` before the run is reused."""
+    return {name: _file_digest(directory / name) for name in names}
 
 
 def holds_attempt(directory: Path) -> bool:
@@ -236,13 +259,14 @@ def holds_attempt(directory: Path) -> bool:
     return directory.exists() and any(entry.name not in KEPT for entry in directory.iterdir())
 
 
-def retire(directory: Path, root: Path) -> Path:
+def retire(directory: Path, root: Path, only: tuple[str, ...] | None = None) -> Path:
     """Move what a dead, failed or stale attempt left to root/attic/<name>-<time> (nothing computed is
-    deleted), so the directory can run again. The lock file and the jobs (KEPT) stay: call it under the lock."""
+    deleted), so the directory can run again. The lock file and the jobs (KEPT) stay: call it under the
+    lock. only: move just these entries (those present), e.g. a study's products beside a campaign's record."""
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
     target = root / ATTIC / f"{directory.name}-{stamp}"
     target.mkdir(parents=True)
     for entry in directory.iterdir():
-        if entry.name not in KEPT:
+        if entry.name not in KEPT and (only is None or entry.name in only):
             shutil.move(str(entry), target / entry.name)
     return target

@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 from orchestrator import __version__, rundir
 from orchestrator.case import Case
-from orchestrator.engines import EngineAdapter, EngineError, RunOptions, get_adapter
+from orchestrator.engines import EngineAdapter, EngineError, RunOptions, capabilities, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, log_tail
 from orchestrator.estimate import check_machine
@@ -121,7 +121,9 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     engine_seconds = time.perf_counter() - started
     trajectory.attrs.update(engine=build["engine"], engine_version=build["version"] or "unknown", case_name=case.name)
     write_results(directory / RESULTS, trajectory)
+    state = capabilities(case.engine.value).state_file if case.save_state else None
     record.update(
+        sealed=rundir.seal_outputs(directory, [RESULTS] + ([state] if state else [])),
         status="completed",
         finished=rundir.now(),
         wall_time_s=time.perf_counter() - started,
@@ -203,21 +205,28 @@ def ensure_run(
 
     The directory's lock serialises processes that need the same run (campaign workers, say): the
     first runs it, the others wait and reuse it. A run is reused only when it is completed and
-    current (rundir.status) and the state file it must leave (`state_file(directory)`, if any)
-    exists; an interrupted attempt with a checkpoint continues from it, any other failed or
-    interrupted attempt is moved to root/attic. `what` names the run in errors
-    ("the packing run failed: …").
+    current (rundir.status: the run of this very id, its sealed results and saved state intact) and
+    the state file it must leave (`state_file(directory)`, if any) exists; an interrupted attempt
+    with a checkpoint continues from it, any other failed, interrupted or stale attempt is moved to
+    root/attic, and the new run's record says so (`set_aside`: where, and why). `what` names the run
+    in errors ("the packing run failed: …").
     """
     directory = root / rundir.run_id(case, case_dir=root)
     with rundir.locked(directory, wait=True):
         required = state_file(directory)
-        if rundir.status(directory, held=True) == "completed" and (required is None or required.is_file()):
+        state = rundir.status(directory, held=True, expected_id=directory.name)
+        if state == "completed" and (required is None or required.is_file()):
             return directory, True
         plan = make_plan(case, root)
+        set_aside = None
         if rundir.holds_attempt(directory) and resume_point(plan, directory) is None:
-            rundir.retire(directory, root)
+            why = (rundir.why_stale(directory, rundir.read_json(directory / RUN_RECORD) or {}, expected_id=directory.name)
+                   if state == "stale" else "its saved state is missing" if state == "completed" else f"it was {state}")
+            set_aside = {"attic": str(rundir.retire(directory, root)), "why": why}
         try:
-            run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)
+            record = run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)
         except EngineError as error:
             raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
+        if set_aside:  # one line in its record: what was there before, why it no longer stood, where it went
+            rundir.write_record(directory, {**record, "set_aside": set_aside})
     return directory, False

@@ -75,7 +75,7 @@ def format_error(error: ValidationError, root: type[BaseModel] | None = None) ->
             allowed = allowed_range(root, location) if root is not None else None
             message = f"{message}; allowed range: {allowed}" if allowed else message
         text = f"{'.'.join(str(p) for p in location)}: {message}" if location else message
-        if location and item["type"] != "missing":
+        if location and item["type"] != "missing" and "(got " not in message:  # a validator's message may name the value already
             text += f" (got {_SHORT.repr(item.get('input'))})"
         lines.append(bounded(text))
     shown = "; ".join(lines[:MAX_PROBLEMS])

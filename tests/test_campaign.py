@@ -17,12 +17,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from orchestrator.campaign import store
-from orchestrator.campaign.execute import run_campaign
+from orchestrator.campaign import execute
+from orchestrator.campaign.execute import plan_campaign, run_campaign
 from orchestrator.campaign.spec import CampaignSpec, design_points, evaluate, expand, load_campaign
 from orchestrator.case import CaseError
 from orchestrator.results import read_results
 
-from conftest import requires_liggghts
+from conftest import assert_one_line_error, requires_liggghts, run_cli
 
 REPO = Path(__file__).resolve().parent.parent
 BASE = REPO / "cases" / "free_fall.yaml"
@@ -65,6 +66,49 @@ def test_unknown_parameter_path_is_a_clear_error(tmp_path: Path) -> None:
     spec, base = load_campaign(write_campaign(tmp_path, [{"kind": "grid", "parameters": {"contacts.0.mew": [0.1]}}]))
     with pytest.raises(CaseError, match=r"has no 'contacts.0.mew'"):
         expand(spec, base)
+
+
+def test_jobs_below_one_write_nothing_and_workers_are_capped_at_the_points_to_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """-j takes 1 … : below is an error before points.json; the local pool and a Dask cluster the
+    launch starts get at most one worker per point to run, and none start when nothing is left."""
+    campaign, out = write_campaign(tmp_path, [{"kind": "grid", "parameters": {"gravity.2": [-9.81, -5.0]}}]), tmp_path / "out"
+    for jobs in (0, -1):
+        with pytest.raises(CaseError, match=rf"--jobs: {jobs} runs at once; allowed: at least 1"):
+            run_campaign(campaign, out, jobs=jobs)
+    assert not out.exists()
+    workers: list[tuple[str, int]] = []
+
+    def local(plan: execute.Plan, jobs: int):  # no engine: every point reported failed, nothing written
+        workers.append(("local", jobs))
+        yield from ({"run_id": identifier, "status": "failed", "error": "not run"} for identifier in plan.to_run)
+
+    monkeypatch.setattr(execute, "local_results", local)
+    monkeypatch.setattr(execute, "dask_results", lambda plan, jobs, address=None, start=None: (workers.append(("dask", jobs)), local(plan, jobs))[1])
+    assert run_campaign(campaign, out, jobs=8).failed == 2
+    assert run_campaign(campaign, out, jobs=8, executor="dask").failed == 2
+    assert workers == [("local", 2), ("dask", 2), ("local", 2)]
+    monkeypatch.setattr(store, "status", lambda directory: "completed")
+    assert run_campaign(campaign, out, jobs=8, executor="dask").skipped == 2
+    assert len(workers) == 3  # nothing to run: no pool, no cluster
+
+
+def test_a_directory_holding_another_campaign_is_refused_and_the_same_one_resumes(tmp_path: Path) -> None:
+    """campaign.json records the name, base and designs: another campaign into that directory is
+    one line (exit 2) and points.json stays as it was; the same campaign plans again."""
+    campaign, out = write_campaign(tmp_path, GRID), tmp_path / "out"
+    first = plan_campaign(campaign, out)
+    points = (out / store.POINTS).read_text()
+    other = tmp_path / "other.yaml"
+    other.write_text(yaml.safe_dump({"name": "other", "base": "base.yaml", "designs": [{"kind": "grid", "parameters": {"gravity.2": [-3.0]}}]}))
+    assert_one_line_error(*run_cli(["campaign", "run", str(other), "-o", str(out)]), expected_code=2,
+                          field=f"--output: {out} holds campaign 'grid' (base {tmp_path / 'base.yaml'}), and campaign 'other' differs in its name and designs")
+    assert (out / store.POINTS).read_text() == points and not (out / store.INDEX).exists()
+    assert plan_campaign(campaign, out).points == first.points  # a relaunch
+    (out / store.CAMPAIGN).unlink()  # a directory from before campaign.json: the parameters its points vary tell
+    with pytest.raises(CaseError, match=r"holds another campaign \(varying \['bodies.spheres.0.velocity', 'gravity.2'\]\)"):
+        plan_campaign(other, out)
+    plan_campaign(campaign, out)
+    assert (out / store.CAMPAIGN).exists()
 
 
 @requires_liggghts

@@ -47,6 +47,22 @@ def test_bound_errors_state_the_allowed_range(tmp_path: Path) -> None:
         load_case(Path(__file__).parent / "cases" / "bad" / "restitution_above_one.yaml")
 
 
+def test_a_validators_message_shows_the_value_once_and_cites_only_what_applies() -> None:
+    """A model validator's message that names the value already gets no second `(got …)` (the whole
+    shape entry); a rounding too large on an unbevelled brick names its range, not bevel_deg."""
+    from conftest import case_data
+    from orchestrator.case import parse_case
+
+    shape = {"name": "b", "length": 0.031, "width": 0.015, "thickness": 0.008, "rounding": 0.01}
+    with pytest.raises(CaseError) as caught:
+        parse_case({**case_data(), "shapes": [shape]})
+    message = str(caught.value)
+    assert message == "case: shapes.0: rounding: allowed: 0, or [1e-06, 0.004) m (below half the smallest side) (got 0.01)"
+    with pytest.raises(CaseError) as caught:
+        parse_case({**case_data(), "shapes": [{**shape, "rounding": 0.001, "bevel_deg": 2.0}]})
+    assert str(caught.value).count("(got") == 1 and "rounding: needs bevel_deg 0" in str(caught.value)
+
+
 def test_good_case_files_load() -> None:
     for path in sorted((Path(__file__).parent.parent / "cases").glob("*.yaml")):
         case = load_case(path)

@@ -36,8 +36,35 @@ def test_box_deposit() -> None:
     assert m.x_cm == pytest.approx(0.75)
     cm0, cm1 = initial.mean(axis=0), final.mean(axis=0)
     assert m.travel_angle_cm_deg == pytest.approx(math.degrees(math.atan2(cm0[2] - cm1[2], cm1[0] - cm0[0])))
-    assert m.fahrboschung_deg == pytest.approx(math.degrees(math.atan2(1.0 + R, 1.0 + R - initial[np.argmax(initial[:, 2]), 0])))
     assert m.outliers == 0 and m.length_raw == m.length
+
+
+def test_fahrboschung_starts_at_the_rear_of_the_base_on_the_slope_as_fig9_draws_it() -> None:
+    """A slab of two layers of bodies resting on a 45° slope, s from 1.414 to 2.014 m up the slope (the
+    experiment's box: its base's upper end at about (−1.42, 1.42) m), one body perched 0.1 m above the
+    slab's middle. φ_app runs from the rear of the slab's base (s_max + R on the slope) to the distal
+    end on the board, whatever stands above the slab; a perched body would set the old 'top of the
+    mass' line (atan of a higher point), not this one."""
+    c = math.cos(math.radians(45.0))
+    s = np.linspace(1.414, 2.014, 31)
+    layers = [np.stack([-si * c + n * c * np.ones_like(si), np.zeros_like(si), si * c + n * c * np.ones_like(si)], axis=1)
+              for si, n in ((s, R), (s, 3 * R))]
+    perched = np.array([[-1.714 * c + 0.1 * c, 0.0, 1.714 * c + 0.1 * c]])
+    initial = np.concatenate(layers + [perched])
+    final = grid((0.5, 1.0), (0.0, 0.0), (R, R), step=0.5 / (len(initial) - 1))[: len(initial)]
+    m = deposit_metrics(initial, final, np.ones(len(final)), np.full(len(final), R), slope_deg=45.0)
+    rear = 2.014 + R
+    expected = math.degrees(math.atan2(rear * c, m.runout + rear * c))
+    assert m.runout == pytest.approx(1.0 + R)
+    assert m.fahrboschung_deg == pytest.approx(expected, abs=1e-9)
+    # On a 30° slope the same centres sit elsewhere on it: the rule follows the slope it is given.
+    assert deposit_metrics(initial, final, np.ones(len(final)), np.full(len(final), R), slope_deg=30.0).fahrboschung_deg != pytest.approx(expected)
+
+
+def test_a_mass_released_from_the_flat_has_no_fahrboschung() -> None:
+    final = grid((0.5, 1.0), (-0.1, 0.1), (0.005, 0.025))
+    initial = final - [0.4, 0.0, 0.0]  # on the board, nothing on the slope
+    assert math.isnan(deposit_metrics(initial, final, np.ones(len(final)), np.full(len(final), R)).fahrboschung_deg)
 
 
 def test_wedge_deposit_centre_of_mass() -> None:

@@ -68,6 +68,11 @@ CASES: dict[str, tuple[Callable[[], Any], str]] = {
     "brick_of_negative_length": (with_field(shapes=[{**SHAPE, "length": -0.031}]), "shapes.0.length"),
     "rounding_on_a_bevelled_brick": (with_field(shapes=[{**SHAPE, "bevel_deg": 2.0, "rounding": 0.001}]), "rounding: needs bevel_deg 0"),
     "rounding_beyond_the_thickness": (with_field(shapes=[{**SHAPE, "rounding": 0.005}]), "rounding"),
+    "rounding_of_a_nanometre": (with_field(shapes=[{**SHAPE, "rounding": 1e-9}]), "shapes.0: rounding: allowed: 0, or [1e-06, 0.004) m"),
+    "clump_of_spheres_below_a_micron": (with_field(shapes=[{**SHAPE, "thickness": 1e-4, "layout": [4, 2, 64]}]),
+                                        "shapes.0: layout: the clump's smallest sphere would be 7.81e-07 m in radius; allowed: at least 1e-06 m"),
+    "spin_of_1e5_rad_per_s": (changed(bodies__spheres__0__angular_velocity=[0.0, 1e5, 0.0]),
+                              "bodies.spheres.0.angular_velocity: 1e+05 rad/s moves the surface at up to 500 m/s"),
     "clump_of_unknown_shape": (changed(bodies={"clumps": [{"shape": "nope", "material": "glass", "position": [0, 0, 1]}]}), "unknown shape 'nope'"),
     "wall_with_a_zero_edge": (with_field(walls=[{**FLOOR, "edge1": [0, 0, 0]}]), "walls.0.rectangle"),
     "wall_with_parallel_edges": (with_field(walls=[{**FLOOR, "edge2": [0.4, 0, 0]}]), "walls.0.rectangle"),
@@ -211,6 +216,8 @@ ARGUMENTS: dict[str, tuple[list[str], str]] = {  # {tmp}: the test's directory, 
     "campaign_table_of_nothing": (["campaign", "table", "{tmp}/nope"], "CAMPAIGN_DIR"),
     "campaign_plot_of_nothing": (["campaign", "plot", "{tmp}/nope"], "CAMPAIGN_DIR"),
     "campaign_jobs_not_a_number": (["campaign", "run", "{tmp}/case.yaml", "-j", "many"], "--jobs"),
+    "campaign_jobs_zero": (["campaign", "run", "{tmp}/case.yaml", "-j", "0"], "'--jobs' / '-j': 0 is not in the range 1<=x<=100000"),
+    "campaign_jobs_negative": (["campaign", "run", "{tmp}/case.yaml", "-j", "-1"], "'--jobs' / '-j': -1 is not in the range 1<=x<=100000"),
 }
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -199,3 +200,29 @@ def test_the_command_prints_the_collection_and_errors_are_one_line(tmp_path: Pat
     assert_one_line_error(*run_cli(["paraview", str(run), "--stride", "0"]), expected_code=2, field="--stride")
     (run / "case.json").write_text("{")
     assert_one_line_error(*run_cli(["paraview", str(run)]), expected_code=5, field="case.json cannot be read")
+
+
+def test_links_in_the_output_directory_are_replaced_never_followed(tmp_path: Path) -> None:
+    """A symbolic or hard link under an output file's name (or a link as the default paraview/) is
+    removed and a new file written in its place: nothing outside the output directory changes."""
+    case, trajectory = superquadric_brick(frames=2)
+    run = saved_run(tmp_path / "run", case, trajectory)
+    outside = tmp_path / "outside.txt"
+    outside.write_text("precious")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "bodies.pvd").symlink_to(outside)
+    (out / "bodies_superquadric_00001.vtu").symlink_to(outside)
+    os.link(outside, out / "bodies_superquadric_00000.vtu")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (run / "paraview").symlink_to(elsewhere, target_is_directory=True)
+    for arguments in (["--out", str(out)], []):
+        result = CliRunner().invoke(main, ["paraview", str(run), *arguments])
+        assert result.exit_code == 0, result.output
+    assert outside.read_text() == "precious" and not list(elsewhere.iterdir())
+    for directory in (out, run / "paraview"):
+        assert not directory.is_symlink() and not any(p.is_symlink() for p in directory.iterdir())
+        assert [p.name for _, _, p in collection(directory / "bodies.pvd")] == ["bodies_superquadric_00000.vtu", "bodies_superquadric_00001.vtu"]
+    assert len(meshio.read(out / "bodies_superquadric_00000.vtu").points) > 0
+

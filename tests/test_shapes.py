@@ -80,6 +80,18 @@ def test_an_engine_without_superquadrics_names_the_engines_that_have_them() -> N
     parse_case(_case("liggghts", study_brick(kind="superquadric")))
 
 
+def test_a_case_made_from_a_study_names_the_studys_fields() -> None:
+    """parse_case(fields=…): the avalanche study's `brick` is its case's `shapes.0`, so the error names
+    `brick.kind`; a field path is renamed whole (shapes.01, bodies.shapes.0 would stay)."""
+    with pytest.raises(CaseError) as caught:
+        parse_case(_case("yade", study_brick(kind="superquadric")), source="study s", fields={"shapes.0": "brick"})
+    assert str(caught.value) == "study s: brick.kind: yade takes clump bodies, not superquadric; engines that can: liggghts"
+    with pytest.raises(CaseError, match=r"^study s: brick: rounding: allowed: 0, or \[1e-06, 0.004\) m"):
+        parse_case(_case("liggghts", study_brick(rounding=0.005)), source="study s", fields={"shapes.0": "brick"})
+    with pytest.raises(CaseError, match=r"^case: shapes.0.kind: yade takes clump bodies"):  # without fields: the case's own names
+        parse_case(_case("yade", study_brick(kind="superquadric")))
+
+
 def test_glue_is_refused_where_the_engine_cannot_glue_that_kind() -> None:
     sphere_engine = _case("cocd", study_brick(), fixed=True)
     with pytest.raises(CaseError, match="bodies.clumps"):

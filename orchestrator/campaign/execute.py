@@ -48,7 +48,7 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
     started = time.perf_counter()
     try:
         with rundir.locked(path, wait=False):
-            state = rundir.status(path, store.inputs_model(kind), held=True)
+            state = rundir.status(path, store.inputs_model(kind), held=True, expected_id=path.name)
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
             plan = _case_plan(point_json, Path(case_dir)) if kind == "case" else None
@@ -81,6 +81,10 @@ def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float 
     try:
         if kind == "case":
             case = Case.model_validate_json(point_json)
+            today = rundir.run_id(case, case_dir=case_dir)
+            if today != path.name:  # a file it names changed since the launch planned it: this directory is not its
+                return {"run_id": path.name, "status": "skipped",
+                        "reason": f"its inputs changed since the launch planned it (now run {today}): relaunch to run them"}
             record = run_locked(case, case_dir, path, None, timeout, get_adapter(case.engine.value, options), plan)
         else:
             record = perform_study(kind, point_json, path, started, timeout, options)
@@ -166,7 +170,8 @@ class Plan:
 def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
     spec, base = load_campaign(campaign_file)
     kind = base_kind(spec, base)
-    base_dir = (campaign_file.parent / spec.base).resolve().parent
+    base_path = (campaign_file.parent / spec.base).resolve()
+    base_dir = base_path.parent
     points, cases = {}, {}
     builds: dict[str, dict[str, Any]] = {}
     for parameters, case in expand(spec, base):
@@ -176,6 +181,9 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
         identifier = rundir.run_id(case, builds[engine], case_dir=base_dir)
         points[identifier] = parameters
         cases[identifier] = case
+    # Another campaign's directory is refused before its points.json is touched; this one's is resumed.
+    identity = {"name": spec.name, "base": str(base_path), "designs": [design.model_dump(mode="json") for design in spec.designs]}
+    store.claim(campaign_dir, identity, {name for parameters in points.values() for name in parameters})
     store.write_points(campaign_dir, points)
     to_run, skipped = [], {}
     for identifier in points:
@@ -213,11 +221,19 @@ def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:
             yield future.result()
 
 
-def dask_results(plan: Plan, jobs: int, address: str | None = None) -> Iterator[dict[str, Any]]:
-    """Run on Dask: a scheduler at `address` (e.g. from dask-jobqueue), or a LocalCluster of `jobs` processes."""
-    from distributed import Client, LocalCluster, as_completed
+def local_cluster(jobs: int) -> Any:
+    """A Dask LocalCluster of `jobs` single-threaded worker processes."""
+    from distributed import LocalCluster
 
-    cluster = None if address else LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+    return LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+
+
+def dask_results(plan: Plan, jobs: int, address: str | None = None, start: Callable[[int], Any] | None = None) -> Iterator[dict[str, Any]]:
+    """Run on Dask: a scheduler at `address` (e.g. from dask-jobqueue), or a cluster of `jobs` workers
+    that `start(jobs)` starts (default: local_cluster) and this closes."""
+    from distributed import Client, as_completed
+
+    cluster = None if address else (start or local_cluster)(jobs)
     client = Client(address or cluster)
     try:
         submitted = {client.submit(perform, *_arguments(plan, identifier), pure=False, key=f"run-{identifier}"): identifier
@@ -242,13 +258,25 @@ def run_campaign(
     dask_address: str | None = None,
     on_update: Callable[[Counts, dict[str, Any] | None], None] | None = None,
     options: RunOptions | None = None,
+    dask_cluster: Callable[[int], Any] | None = None,
 ) -> Counts:
-    """Run every pending point (options: how the engines run, e.g. MPI processes per run)."""
+    """Run every pending point (options: how the engines run, e.g. MPI processes per run).
+
+    jobs: runs at once, at least 1; the local pool, or the Dask cluster this starts (`dask_cluster(n)`,
+    default a LocalCluster; none with `dask_address`), gets at most one worker per point to run, and
+    none when every point is done. CaseError (nothing written) for jobs below 1 or a campaign
+    directory that holds another campaign (store.claim)."""
+    if jobs < 1:
+        raise CaseError(f"--jobs: {jobs!r} runs at once; allowed: at least 1 (capped at the points to run)")
     plan = dataclasses.replace(plan_campaign(campaign_file, campaign_dir, rerun_failed), options=options or RunOptions())
-    counts = Counts(total=len(plan.points), skipped=len(plan.skipped), running=min(jobs, len(plan.to_run)))
+    jobs = min(jobs, len(plan.to_run))
+    counts = Counts(total=len(plan.points), skipped=len(plan.skipped), running=jobs)
     if on_update:
         on_update(counts, None)
-    results = dask_results(plan, jobs, dask_address) if executor == "dask" else local_results(plan, jobs)
+    if not plan.to_run:
+        results: Iterator[dict[str, Any]] = iter(())
+    else:
+        results = dask_results(plan, jobs, dask_address, dask_cluster) if executor == "dask" else local_results(plan, jobs)
     for summary in results:
         if summary["status"] == "completed":
             counts.done += 1

@@ -20,7 +20,7 @@ import pandas as pd
 from pydantic import BaseModel
 
 from orchestrator import rundir
-from orchestrator.case import Case
+from orchestrator.case import Case, CaseError
 from orchestrator.rundir import RUN_RECORD, retire
 from orchestrator.studies.registry import study_kind
 
@@ -28,9 +28,11 @@ RUNS = "runs"
 POINTS = "points.json"
 LATEST = "latest.json"  # the run ids of the newest launch's points: every other point is superseded
 INDEX = "index.parquet"
+CAMPAIGN = "campaign.json"  # which campaign the directory holds: its name, base file and designs
 CAMPAIGN_LOCK = ".campaign.lock"
 
-__all__ = ["RUNS", "POINTS", "INDEX", "run_id", "run_dir", "status", "retire", "write_points", "build_index", "campaign_lock"]
+__all__ = ["RUNS", "POINTS", "INDEX", "CAMPAIGN", "run_id", "run_dir", "status", "retire", "claim", "write_points", "build_index",
+           "campaign_lock"]
 
 
 def run_id(point: BaseModel, case_dir: Path | None = None) -> str:
@@ -47,14 +49,15 @@ def inputs_model(kind: str) -> type[BaseModel]:
 
 
 def status(directory: Path) -> str:
-    """rundir.status of a campaign run, its inputs read as the kind its record names."""
+    """rundir.status of a campaign run, its inputs read as the kind its record names; the run must be
+    the one its directory is named for (a point directory stands for its run id)."""
     record = rundir.read_json(directory / RUN_RECORD) or {}
     kind = record.get("kind", "case")
     try:
         model = inputs_model(str(kind))
     except ValueError:
         return "incomplete"
-    return rundir.status(directory, model)
+    return rundir.status(directory, model, expected_id=directory.name)
 
 
 @contextmanager
@@ -67,6 +70,30 @@ def campaign_lock(campaign_dir: Path) -> Iterator[None]:
             yield
         finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def claim(campaign_dir: Path, identity: dict[str, Any], parameters: set[str]) -> None:
+    """Record that `campaign_dir` holds the campaign `identity` ({"name", "base": the base file's
+    absolute path, "designs"}) in campaign.json, or raise CaseError, writing nothing, when it holds
+    another one: its points.json and index would be overwritten. A relaunch of the same campaign
+    (its base case edited, say) goes on. A campaign directory from before campaign.json is taken when
+    its points vary the same `parameters` (the names of the varied fields)."""
+    identity = json.loads(json.dumps(identity))  # as it reads back from the file
+    with campaign_lock(campaign_dir):
+        recorded = rundir.read_json(campaign_dir / CAMPAIGN)
+        if recorded is not None:
+            differs = [key for key in ("name", "base", "designs") if recorded.get(key) != identity[key]]
+            held = f"campaign {recorded.get('name')!r} (base {recorded.get('base')})"
+        else:
+            points = rundir.read_json(campaign_dir / POINTS) or {}
+            varied = {name for values in points.values() if isinstance(values, dict) for name in values}
+            differs = ["varied parameters"] if points and varied != parameters else []
+            held = f"another campaign (varying {sorted(varied)})"
+        if differs:
+            raise CaseError(f"--output: {campaign_dir} holds {held}, and campaign {identity['name']!r} differs in its {' and '.join(differs)}; "
+                            f"its {POINTS} and {INDEX} would be overwritten: choose another -o (relaunching that campaign there resumes it)")
+        if recorded is None:
+            _write(campaign_dir / CAMPAIGN, json.dumps(identity, indent=1, sort_keys=True))
 
 
 def write_points(campaign_dir: Path, points: dict[str, dict[str, Any]]) -> None:

@@ -21,13 +21,17 @@ DEMO_STUDY = REPO_ROOT / "cases" / "avalanche" / "small.yaml"
 
 def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -> Path:
     """Plots, snapshots, VTK and index.html for a study directory; returns the page."""
+    from orchestrator.results import safe_output_path
     from orchestrator.studies.avalanche import report as pictures
-    from orchestrator.studies.avalanche.study import BrickSpec, load_reference
+    from orchestrator.studies.avalanche.study import KIND
+    from orchestrator.studies.reference import load_reference
 
     trajectory = read_results(outdir / RELEASE_DIR / RESULTS)
-    figures = outdir / "report"
+    figures = safe_output_path(outdir, "report")  # a link named report would take the figures out of the study directory
     figures.mkdir(exist_ok=True)
-    brick = BrickSpec.model_validate(report["study"]["brick"]).build()
+    for entry in list(figures.iterdir()):  # the writers below open their files by name: no link there may lead them out
+        safe_output_path(figures, entry.name)
+    brick = KIND.parse(report["study"], str(outdir / "report.json")).brick_spec.build()  # the kind the run used
     pictures.plot_deposit(trajectory, brick, figures / "deposit.png", slope_deg)
     pictures.plot_front(report, figures / "front.png")
     snapshots = pictures.plot_snapshots(trajectory, figures, slope_deg=slope_deg)
@@ -35,18 +39,30 @@ def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -
     chains = [figures / "force_chains.png"] if trajectory.contacts is not None else []
     if chains:
         pictures.plot_force_chains(trajectory, chains[0])
-    rows = pictures.comparison_rows(report, load_reference())
+    rows = pictures.comparison_rows(report, load_reference(), demo_ranges(report))
     return pictures.write_html(figures, outdir.name, rows, [figures / "deposit.png", *chains, figures / "front.png", *snapshots])
 
 
+def demo_ranges(report: dict[str, Any]) -> dict[str, Any] | None:
+    """The study's code's ranges for the demo (validation record) when `report` is the demo's set-up
+    (its geometry and volume), else None."""
+    from orchestrator.studies.avalanche.study import load_study
+    from orchestrator.studies.validation_page import demo_reference
+
+    demo = load_study(DEMO_STUDY)
+    study = report.get("study", {})
+    same = study.get("geometry") == demo.geometry.model_dump(mode="json") and study.get("packing", {}).get("volume") == demo.packing.volume
+    return demo_reference() if same else None
+
+
 def study_table(title: str, report: dict[str, Any]) -> Table:
-    from orchestrator.studies.avalanche.study import load_reference
+    from orchestrator.studies.reference import load_reference
     from orchestrator.studies.avalanche.report import comparison_rows
 
     table = Table(title=title, header_style="bold")
     for column in ("metric", "value", "reference", "check"):
         table.add_column(column, justify="right" if column == "value" else "left")
-    for name, value, reference, verdict in comparison_rows(report, load_reference()):
+    for name, value, reference, verdict in comparison_rows(report, load_reference(), demo_ranges(report)):
         table.add_row(name, f"{value:.4g}", reference, verdict)
     return table
 
@@ -76,10 +92,14 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
     except EngineError as error:
         fail(str(error), code=3)
     packing = report.get("packing", {})
+    if report.get("set_aside"):
+        console.print(f"[yellow]set aside[/] what {outdir} held before ({report['set_aside']['why']}): {report['set_aside']['attic']}")
     if report.get("finished_before"):
         console.print(f"already complete in {outdir / 'run'} (delete that directory to run it again); measured again")
     if packing.get("directory"):
         console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
+    if packing.get("warning"):
+        console.print(f"[yellow]warning:[/] {packing['warning']}")
     try:
         page = write_study_report(outdir, report, study.geometry.slope_deg)
         console.print(study_table(f"{study.name} on {study.engine.value}", report))

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import click
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from orchestrator.case import CaseError
 from orchestrator.cli.common import console, errors, fail, run_options
+
+MAX_JOBS = 100_000  # runs at once (a campaign holds at most 100 000 points: campaign.spec.MAX_POINTS)
 
 
 @click.group()
@@ -22,7 +25,8 @@ def campaign() -> None:
 @campaign.command("run")
 @click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Campaign directory (default runs/campaigns/NAME).")
-@click.option("--jobs", "-j", type=int, default=None, help="Parallel engine processes (default: one per core).")
+@click.option("--jobs", "-j", type=click.IntRange(1, MAX_JOBS), default=None,
+              help="Parallel engine processes (default: one per core), at most one per point to run.")
 @click.option("--executor", type=click.Choice(["local", "dask"]), default="local", show_default=True)
 @click.option("--dask-address", help="Scheduler address of an existing Dask cluster (e.g. started by dask-jobqueue).")
 @click.option("--rerun-failed", is_flag=True, help="Run failed runs again (their attempt moves to the attic).")
@@ -35,7 +39,7 @@ def campaign_run(campaign_file: Path, output: Path | None, jobs: int | None, exe
 @click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Campaign directory, on a file system the nodes share (default runs/campaigns/NAME).")
 @click.option("--walltime", required=True, help="Each job's wall-time limit, [D-]HH:MM:SS; a run cut off at a job's end continues in the next job from its checkpoint.")
-@click.option("--jobs", "-j", type=click.IntRange(1, 10_000), required=True, help="Jobs queued or running at once (one run each).")
+@click.option("--jobs", "-j", type=click.IntRange(1, 10_000), required=True, help="Jobs queued or running at once (one run each; at most one per point to run).")
 @click.option("--processes", type=click.IntRange(1, 256), default=1, show_default=True, help="CPUs per job: the MPI processes of a run (LIGGGHTS).")
 @click.option("--memory", default="4GB", show_default=True, help="Memory per job.")
 @click.option("--partition", help="SLURM partition (-p).")
@@ -60,12 +64,17 @@ def campaign_slurm(context: click.Context, campaign_file: Path, output: Path | N
     if dry_run:
         click.echo(job_script(spec))
         return
-    with start_cluster(spec) as cluster:
-        console.print(f"SLURM jobs: {jobs} × {processes} CPUs, {walltime} each; scheduler {cluster.scheduler_address}")
-        _launch(campaign_file, output, jobs, "dask", cluster.scheduler_address, rerun_failed)
+
+    def start(workers: int) -> Any:  # once the points to run are known: at most one job per point
+        cluster = start_cluster(dataclasses.replace(spec, jobs=workers))
+        console.print(f"SLURM jobs: {workers} × {processes} CPUs, {walltime} each; scheduler {cluster.scheduler_address}")
+        return cluster
+
+    _launch(campaign_file, output, jobs, "dask", None, rerun_failed, start)
 
 
-def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor: str, dask_address: str | None, rerun_failed: bool) -> None:
+def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor: str, dask_address: str | None, rerun_failed: bool,
+            dask_cluster: Callable[[int], Any] | None = None) -> None:
     import os
 
     from orchestrator.campaign.execute import run_campaign
@@ -96,7 +105,8 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
                 failures.append(f"{summary['run_id']}: {summary.get('error', '')}")
 
         try:
-            counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update, options=run_options())
+            counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update, options=run_options(),
+                                  dask_cluster=dask_cluster)
         except CaseError as error:
             fail(str(error))
     for line in failures:

@@ -86,6 +86,8 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
         fail(str(error))
     except EngineError as error:
         fail(str(error), code=3)
+    if report.get("set_aside"):
+        console.print(f"[yellow]set aside[/] what {outdir} held before ({report['set_aside']['why']}): {report['set_aside']['attic']}")
     console.print(collapse_table(f"{study.name} on {study.engine.value}: α = {study.channel.slope_deg:g}°, h_i = {1000 * study.bed.erodible_thickness:g} mm", report))
     console.print(f"report: {outdir / 'report.json'}, figure: {figure}")
 

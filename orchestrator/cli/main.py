@@ -205,7 +205,7 @@ def doctor() -> None:
             built = bool(status["superquadric_built"])
             details = str(status["superquadric_executable"]) if built else "not built yet: run `demorch build-contact` (about 6 min)"
             table.add_row(f"superquadric bodies ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
-    from orchestrator.studies.avalanche.study import PACKAGED_REFERENCE, reference_path
+    from orchestrator.studies.reference import PACKAGED_REFERENCE, reference_path
 
     reference = reference_path()
     origin = "packaged copy" if reference == PACKAGED_REFERENCE else "project"

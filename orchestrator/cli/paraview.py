@@ -10,7 +10,7 @@ from rich.progress import BarColumn, Progress, TextColumn
 
 from orchestrator.cli.common import DAMAGE, EXIT_DAMAGED, console, damaged, errors, fail, results_path, writable_rundir
 from orchestrator.post.paraview import KINDS, write_series
-from orchestrator.results import CASE_COPY, read_results
+from orchestrator.results import CASE_COPY, read_results, safe_output_path
 from orchestrator.rundir import saved_case
 
 
@@ -37,7 +37,7 @@ def paraview(rundir: Path, stride: int, outdir: Path | None, resolution: int | N
         trajectory.validate()
     except DAMAGE as error:
         damaged(rundir, "damaged results", error)
-    outdir = outdir or rundir / "paraview"
+    outdir = outdir or safe_output_path(rundir, "paraview")  # a link there would lead the series out of the run directory
     writable_rundir(outdir, "--out")
     try:
         with Progress(TextColumn("writing frames"), BarColumn(), TextColumn("{task.completed}/{task.total}"), console=errors, transient=True) as bar:

@@ -9,8 +9,10 @@ flow, z vertical with the run-out board at z = 0. All metrics use horizontal dis
 - H, height: highest point of the deposit above the board.
 - X_CM: x of the deposit's centre of mass.
 - φ_CM, travel angle of the centre of mass: atan(drop of the centre of mass / its horizontal travel).
-- φ_app, fahrböschung: atan(z of the top of the initial mass / horizontal distance from the top of
-  the initial mass to the distal end), the distal end lying on the board (z = 0).
+- φ_app, fahrböschung: atan(z of the rear of the initial mass's base / horizontal distance from it to
+  the distal end), the distal end lying on the board (z = 0). The rear of the base is where Fig. 9
+  starts the line: the upslope end of the initial mass where it rests on the slope (`rear_of_base`;
+  for the experiment's box filled as a slab, the upper end of the box's base, about (−1.41, 1.41) m).
 
 - bodies on the slope: bodies whose centre came to rest upslope of the toe (x < 0), all bodies counted.
 
@@ -80,9 +82,11 @@ def deposit_metrics(
     mass: np.ndarray,
     radius: np.ndarray,
     link_distance: float | None = None,
+    slope_deg: float = 45.0,
 ) -> DepositMetrics:
-    """Metrics from initial and final body centres (B, 3) in the frame described in the module docstring;
-    NoBodyLeft (a ValueError) when every body was lost."""
+    """Metrics from initial and final body centres (B, 3) in the frame described in the module docstring,
+    on a slope of `slope_deg` (°) ending at the toe x = 0; NoBodyLeft (a ValueError) when every body
+    was lost."""
     require_bodies(final, "deposit")
     present = np.isfinite(final).all(axis=1)
     keep = deposit_members(final, radius, link_distance)
@@ -98,9 +102,8 @@ def deposit_metrics(
     cm_final = (final[keep] * weights[:, None]).sum(axis=0) / weights.sum()
     cm_initial = (initial[keep] * weights[:, None]).sum(axis=0) / weights.sum()
     travel = math.hypot(cm_final[0] - cm_initial[0], cm_final[1] - cm_initial[1])
-    top = int(np.argmax(initial[:, 2] + radius))
-    top_z = float(initial[top, 2] + radius[top])
-    to_distal = distal - float(initial[top, 0])  # the distal end lies on the board, at z = 0
+    rear_x, rear_z = rear_of_base(initial, radius, slope_deg)
+    to_distal = distal - rear_x  # the distal end lies on the board, at z = 0
     return DepositMetrics(
         length=distal - proximal,
         runout=distal,
@@ -108,7 +111,7 @@ def deposit_metrics(
         height=height,
         x_cm=float(cm_final[0]),
         travel_angle_cm_deg=math.degrees(math.atan2(cm_initial[2] - cm_final[2], travel)),
-        fahrboschung_deg=math.degrees(math.atan2(top_z, to_distal)),
+        fahrboschung_deg=math.degrees(math.atan2(rear_z, to_distal)),
         length_raw=distal_raw - proximal_raw,
         runout_raw=distal_raw,
         width_raw=width_raw,
@@ -117,6 +120,34 @@ def deposit_metrics(
         bodies_on_slope=int((x[present] < 0.0).sum()),
         bodies_lost=int((~present).sum()),
     )
+
+
+def slope_coordinates(points: np.ndarray, slope_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """(s, n) of points (B, 3): s the distance up the slope from the toe, n the height above the
+    slope's plane (m), for a slope of `slope_deg` (°) rising from the toe x = 0 towards −x."""
+    a = math.radians(slope_deg)
+    x, z = points[:, 0], points[:, 2]
+    return -x * math.cos(a) + z * math.sin(a), x * math.sin(a) + z * math.cos(a)
+
+
+def rear_of_base(initial: np.ndarray, radius: np.ndarray, slope_deg: float) -> tuple[float, float]:
+    """(x, z) of the rear end of the initial mass where it rests on the slope (m): Fig. 9 of the
+    2012 study draws the fahrböschung from there (the upper end of the release box's base).
+
+    The base is the bodies whose centre lies within one body diameter of the slope's plane; the
+    rear is the furthest upslope reach of their bounding spheres, taken on the slope. initial
+    (B, 3) centres (NaN rows ignored), radius (B,) bounding radii; (NaN, NaN) when no body rests on
+    the slope (a mass released from the flat has no such point, and no fahrböschung).
+    """
+    present = np.isfinite(initial).all(axis=1)
+    s, n = slope_coordinates(initial[present], slope_deg)
+    r = radius[present]
+    base = (n <= 2.0 * r) & (s > 0.0)
+    if not base.any():
+        return math.nan, math.nan
+    rear = float(np.max(s[base] + r[base]))
+    a = math.radians(slope_deg)
+    return -rear * math.cos(a), rear * math.sin(a)
 
 
 def thickness_map(points: np.ndarray, radii: np.ndarray, slope_deg: float, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

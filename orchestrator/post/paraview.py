@@ -43,7 +43,7 @@ import numpy as np
 
 from orchestrator.case import Case
 from orchestrator.post.contacts import force_chains
-from orchestrator.results import Contacts, Trajectory
+from orchestrator.results import Contacts, Trajectory, safe_output_path
 from orchestrator.shapes.clump import quaternion_matrices, unit_sphere_mesh
 
 KINDS = ("sphere", "clump", "superquadric")  # the parts of a frame, in this order
@@ -171,7 +171,8 @@ class Series:
 def write_series(case: Case, trajectory: Trajectory, outdir: Path, stride: int = 1, resolution: dict[str, int] | None = None,
                  progress: Callable[[int, int], None] | None = None) -> Series:
     """Write the surfaces (and the contacts, when recorded) of every `stride`-th frame, the last one
-    included, into `outdir` (module docstring); `progress(done, total)` after each frame.
+    included, into `outdir` (module docstring); `progress(done, total)` after each frame. A link
+    there under a file's name is replaced, never followed (results.safe_output_path).
 
     Raises ValueError when the trajectory and the case disagree on the number of bodies."""
     bodies = len(case.bodies.spheres) + len(case.bodies.clumps)
@@ -191,12 +192,13 @@ def write_series(case: Case, trajectory: Trajectory, outdir: Path, stride: int =
         if recorded is not None:
             pieces.append((CONTACTS, 0, CONTACTS, f"{CONTACTS}_{frame:05d}.vtu", contact_lines(recorded, trajectory.position, frame)))
         for series, part, name, file, mesh in pieces:
-            _write_piece(outdir / file, mesh)
+            _write_piece(safe_output_path(outdir, file), mesh)
             written[series].append((time, part, name, file))
         if progress is not None:
             progress(done, len(frames))
     kinds: dict[str, int] = {}
     for group in groups:
         kinds[group.kind] = kinds.get(group.kind, 0) + len(group.bodies)
-    return Series(write_collection(outdir / f"{BODIES}.pvd", written[BODIES]),
-                  write_collection(outdir / f"{CONTACTS}.pvd", written[CONTACTS]) if recorded is not None else None, frames, kinds)
+    return Series(write_collection(safe_output_path(outdir, f"{BODIES}.pvd"), written[BODIES]),
+                  write_collection(safe_output_path(outdir, f"{CONTACTS}.pvd"), written[CONTACTS]) if recorded is not None else None,
+                  frames, kinds)

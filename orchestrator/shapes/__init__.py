@@ -44,6 +44,9 @@ class BodyShape(Protocol):
     def extent(self) -> np.ndarray: ...  # (3,) m, the centred box holding the solid
 
     @property
+    def centroid_offset(self) -> np.ndarray: ...  # (3,) m, the centre of mass from that box's centre, body frame
+
+    @property
     def particles(self) -> int: ...  # particles the engine moves for one body (a clump's spheres; 1)
 
     @property
@@ -52,6 +55,11 @@ class BodyShape(Protocol):
     def surface_mesh(self, resolution: int = 24) -> tuple[np.ndarray, np.ndarray]: ...  # (n, 3) m, (m, 3) indices
 
     def lowest_points(self, rotations: np.ndarray) -> np.ndarray: ...  # (F,) m, lowest z about the centre per (F, 3, 3) rotation
+
+    def penetration(self, points: np.ndarray) -> np.ndarray: ...  # (n,) m, depth of body-frame points inside the solid (≤ 0 outside)
+
+    @property
+    def probes(self) -> tuple[np.ndarray, np.ndarray]: ...  # spheres (n, 3) m, (n,) m whose union fills the solid to its surface (radius 0: surface points)
 
 
 KINDS: dict[str, Any] = {

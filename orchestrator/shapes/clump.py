@@ -192,6 +192,17 @@ class BrickClump:
         offsets = (np.arange(self.n_spheres) * len(unit))[:, None, None]
         return vertices, (triangles[None, :, :] + offsets).reshape(-1, 3)
 
+    @cached_property
+    def probes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centres (n, 3), radii (n,)) in the body frame: the clump's own spheres."""
+        return self.centres, self.radii
+
+    def penetration(self, points: np.ndarray) -> np.ndarray:
+        """(n,) how deep each body-frame point (n, 3) lies inside the clump (m): the deepest of its
+        spheres, r − |p − c|; ≤ 0 outside."""
+        gaps = self.radii[None, :] - np.linalg.norm(np.asarray(points)[:, None, :] - self.centres[None, :, :], axis=2)
+        return gaps.max(axis=1)
+
     def lowest_points(self, rotations: np.ndarray) -> np.ndarray:
         """(F,) lowest z (m) of the clump's spheres about its centre, the body turned by each of `rotations` (F, 3, 3)."""
         return (np.einsum("fj,sj->fs", np.asarray(rotations)[:, 2, :], self.centres) - self.radii[None, :]).min(axis=1)

@@ -120,6 +120,23 @@ class BrickSuperquadric:
         f(sin ω, ε2), z = c f(sin η, ε1), f(t, ε) = sign(t) |t|^ε, ε = 2/n; `resolution` rows of η."""
         return superquadric_mesh(tuple(self.half_axes), tuple(self.blockiness), resolution)
 
+    @cached_property
+    def probes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(points (n, 3), radii (n,)) in the body frame: the surface mesh's vertices at resolution 8
+        (radius 0), and the centre with the smallest semi-axis (the inscribed ball: coincident bodies)."""
+        vertices = self.surface_mesh(8)[0]
+        return np.vstack([vertices, -self.centroid_offset]), np.append(np.zeros(len(vertices)), self.half_axes.min())
+
+    def penetration(self, points: np.ndarray) -> np.ndarray:
+        """(n,) about how deep each body-frame point (n, 3) lies inside the superquadric (m; ≤ 0
+        outside): (1 − F) × the smallest semi-axis, F the inside-outside function
+        ((|x/a|^n2 + |y/b|^n2)^(n1/n2) + |z/c|^n1)^(1/n1) (Barr 1981); exact on the flat faces'
+        normals through the centre up to the ratio of the semi-axes, never deeper than the truth there."""
+        n1, n2 = self.blockiness
+        q = np.abs(np.asarray(points) + self.centroid_offset) / self.half_axes  # about the superquadric's own centre
+        inside = ((q[:, 0] ** n2 + q[:, 1] ** n2) ** (n1 / n2) + q[:, 2] ** n1) ** (1.0 / n1)
+        return (1.0 - inside) * float(self.half_axes.min())
+
     def lowest_points(self, rotations: np.ndarray) -> np.ndarray:
         """(F,) lowest z (m) of the surface about the centre, the body turned by each of `rotations`
         (F, 3, 3); from the surface sampled at resolution 48 (a face lying flat: exact)."""

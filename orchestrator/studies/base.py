@@ -9,26 +9,35 @@ is measured; this module does the rest the same way for all of them:
 2. the release runs in outdir/run (a finished release is reused: a rerun only measures again);
 3. the kind measures the release: the report (report.json) and arrays too large for JSON;
 4. report.json records the preparation, the study and whether the release was already there.
+
+A study directory is content-addressed like a run: `study.json` holds the study's id (rundir.run_id
+of the study, with today's build) from before its release starts, and a finished release is reused
+only under the same id. A directory holding another study's products (the study file was edited
+since, or the code that runs it changed) has them set aside in the attic beside it, with one line
+in the report (`set_aside`) saying why, and the study runs again.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import shutil
 from pathlib import Path
 from typing import Any, Callable, ClassVar
 
 import numpy as np
 from pydantic import BaseModel
 
+from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions
-from orchestrator.results import RELEASE_DIR, REPORT, Trajectory, read_results  # noqa: F401  (the study layout, re-exported)
+from orchestrator.results import RELEASE_DIR, REPORT, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
 from orchestrator.runner import RESULTS, ensure_run, run_case
 
 
 
 StageProgress = Callable[[str], Callable[[float, float], None] | None]
+STUDY_RECORD = "study.json"  # the study's id, written before its release starts
 
 
 class StudyKind:
@@ -45,6 +54,16 @@ class StudyKind:
 
     def preparation_case(self, study: Any) -> Case:
         raise NotImplementedError
+
+    def prepare(self, study: Any, root: Path, progress: StageProgress | None, timeout: float | None,
+                options: RunOptions) -> tuple[Case, Path, bool, dict[str, Any]]:
+        """Run (or reuse) the preparation under `root`: (the case that made it, its directory, whether
+        it was reused, what else the preparation's record keeps). One case by default; a kind may run
+        several and keep one (a search)."""
+        prepared = self.preparation_case(study)
+        directory, reused = ensure_run(prepared, root, self.preparation, lambda d: self.state_file(study, d),
+                                       progress(self.preparation) if progress else None, timeout, options)
+        return prepared, directory, reused, {}
 
     def state_file(self, study: Any, directory: Path) -> Path | None:
         """The state file the preparation must leave for the release (None: none)."""
@@ -78,19 +97,49 @@ class StudyKind:
 
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
               timeout: float | None, options: RunOptions) -> dict[str, Any]:
+    created = not outdir.exists()
     outdir.mkdir(parents=True, exist_ok=True)
+    try:
+        return _run_study(kind, study, outdir, progress, shared, timeout, options)
+    except BaseException:
+        if created and not any(entry.name != STUDY_RECORD for entry in outdir.iterdir()):
+            shutil.rmtree(outdir, ignore_errors=True)  # a study that failed before making anything leaves no directory
+        raise
+
+
+def study_products(kind: StudyKind) -> tuple[str, ...]:
+    """What a study writes in its directory (a campaign point's own record and inputs are not among them)."""
+    return (RELEASE_DIR, REPORT, f"{kind.preparation}.json", "report", STUDY_RECORD) + ((kind.arrays_file,) if kind.arrays_file else ())
+
+
+def _set_aside_other_study(kind: StudyKind, outdir: Path, study_id: str) -> dict[str, str] | None:
+    """Move another study's products out of `outdir` (to the attic beside it) when its recorded id is
+    not `study_id`; returns where and why, or None when the directory holds this study or nothing."""
+    products = [name for name in study_products(kind) if (outdir / name).exists()]
+    recorded = (read_json(outdir / STUDY_RECORD) or {}).get("study_id")
+    if recorded == study_id or not (set(products) - {STUDY_RECORD}):
+        return None
+    why = (f"it holds the study {recorded}, made from other inputs or by another build than today's {study_id}" if recorded
+           else "it holds a study with no id (made before studies were recorded)")
+    attic = rundir.retire(outdir, outdir.resolve().parent, only=tuple(products))
+    return {"attic": str(attic), "why": why}
+
+
+def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
+               timeout: float | None, options: RunOptions) -> dict[str, Any]:
     release_dir = outdir / RELEASE_DIR
     record = outdir / f"{kind.preparation}.json"
+    study_id = rundir.run_id(study)
+    set_aside = _set_aside_other_study(kind, outdir, study_id)
+    rundir.write_json_atomic(outdir / STUDY_RECORD, {"study_id": study_id, "kind": kind.name})
     finished_before = (release_dir / RESULTS).exists()
     if not finished_before:
         root = shared if shared is not None else outdir.resolve().parent / kind.shared_dir
-        prepared = kind.preparation_case(study)
-        directory, reused = ensure_run(prepared, root, kind.preparation, lambda d: kind.state_file(study, d),
-                                       progress(kind.preparation) if progress else None, timeout, options)
+        prepared, directory, reused, extra = kind.prepare(study, root, progress, timeout, options)
         packed = read_results(directory / RESULTS)
         if not np.isfinite(packed.position[-1]).all():
             raise CaseError(f"{kind.preparation} {directory}: {kind.lost_bodies}")
-        record.write_text(json.dumps({"directory": str(directory), "reused": reused}, indent=2) + "\n")
+        record.write_text(json.dumps({"directory": str(directory), "reused": reused, **extra}, indent=2) + "\n")
         release = kind.release_case(study, prepared, packed, kind.state_file(study, directory))
         run_case(release, outdir, release_dir, progress=progress("release") if progress else None, timeout=timeout, options=options)
     trajectory = read_results(release_dir / RESULTS)
@@ -98,7 +147,10 @@ def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress
     shared_record = json.loads(record.read_text()) if record.exists() else {}
     report[kind.preparation] = {**report.get(kind.preparation, {}), **shared_record}
     report["study"] = study.model_dump(mode="json")
+    report["study_id"] = study_id
     report["finished_before"] = finished_before  # a rerun's reader: nothing ran now
+    if set_aside:
+        report["set_aside"] = set_aside
     if kind.arrays_file and arrays:
         np.savez_compressed(outdir / kind.arrays_file, **arrays)
     (outdir / REPORT).write_text(json.dumps(report, indent=2) + "\n")

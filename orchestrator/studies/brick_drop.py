@@ -31,7 +31,8 @@ from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
-from orchestrator.studies.avalanche.study import BrickSpec, load_reference
+from orchestrator.studies.avalanche.spec import BrickSpec
+from orchestrator.studies.reference import load_reference
 
 G = 9.81
 FRAME = 1.0e-4  # s between frames

@@ -3,8 +3,11 @@
 Frame: x horizontal along the flow, the slope toe at x = 0 (the inclined board at x < 0), y across,
 z vertical (the flat board at z = 0). A point at distance s up the slope is (-s cos α, y, s sin α).
 The release box sits on the slope: its trap (downslope wall) at slope distance launch_height / sin α,
-its depth running upslope, its height normal to the slope. Opening the trap at t = 0 is modelled by
-starting the avalanche run without that wall.
+its depth running upslope, its height normal to the slope. As in the experiment and the 2012 study
+(Fig. 9), the box is filled standing on its own base: the packing runs in place with gravity along
+the slope's normal (`packing_gravity`), which is the box's own frame turned rigidly onto the slope,
+so the pile is a slab parallel to the slope. Opening the trap at t = 0 is modelled by starting the
+avalanche run without that wall, under vertical gravity.
 """
 
 from __future__ import annotations
@@ -61,6 +64,30 @@ class AvalancheGeometry:
     def box_to_world(self, local: np.ndarray) -> np.ndarray:
         """(…, 3) box-frame points (u upslope, v across, n normal) to world points."""
         return self.box_corner() + np.asarray(local) @ self.box_axes
+
+    def world_to_box(self, points: np.ndarray) -> np.ndarray:
+        """(…, 3) world points to the box frame (u upslope from the trap, v across from the box's
+        side, n above the slope), m."""
+        return (np.asarray(points) - self.box_corner()) @ self.box_axes.T
+
+    def packing_gravity(self, g: float = 9.81) -> tuple[float, float, float]:
+        """Gravity while packing (m/s²): along the slope's normal, into the board, as for the box
+        standing on its base before it is set on the slope."""
+        return tuple(float(v) for v in -g * self.normal)  # type: ignore[return-value]
+
+    def slab(self, volume: float) -> tuple[np.ndarray, np.ndarray]:
+        """Centre of a slab of `volume` (m³) lying flat on the box's base, and the upper end of that
+        base (world (3,) points, m): the experiment's initial state (Fig. 9 of the 2012 study: 40 l
+        in the 0.6 × 0.4 × 0.2 m box give about (−1.15, 1.27) and (−1.41, 1.41) m in (x, z))."""
+        thickness = volume / (self.box_depth * self.box_width)
+        return (self.box_to_world([self.box_depth / 2, self.box_width / 2, thickness / 2]),
+                self.box_to_world([self.box_depth, self.box_width / 2, 0.0]))
+
+    def outside_box(self, points: np.ndarray) -> np.ndarray:
+        """(B,) bool: points (B, 3) outside the box (its depth, width and height)."""
+        local = self.world_to_box(points)
+        size = np.array([self.box_depth, self.box_width, self.box_height])
+        return ~np.all((local >= 0.0) & (local <= size), axis=-1)
 
     def walls(self, trap_closed: bool, wall_height: float | None = None) -> list[dict[str, object]]:
         """Rectangles: slope board, flat board, box side and back walls, and the trap if closed."""

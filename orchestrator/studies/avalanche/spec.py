@@ -1,0 +1,214 @@
+"""The avalanche study file: its fields, ranges and defaults, and the checks across them.
+
+A study file (YAML) holds the geometry (Manzella & Labiouse 2009's boards and release box), the brick,
+the contacts (Table 1 of Richefeu et al. 2012 by default), the packing and the release; `cases.py`
+expands it into the packing and release cases.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from orchestrator.bodies import MIN_SIZE, BrickShape, ShapeKind
+from orchestrator.case import Name, Real, RestStop, Strict
+from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.shapes import BodyShape
+from orchestrator.studies.avalanche.geometry import AvalancheGeometry, brick_count
+
+# Between the cells of the rain grid (m): part of the packing's definition (the recorded packings of
+# docs/validation.md use it), not a placement tolerance.
+RAIN_GAP = 0.003
+
+# Between neighbouring bricks of the ordered pile, each way (m). Every engine places a clump at its
+# requested centre (within 1e-6 m, tests/test_initial_state.py), so the pile can be tight: 19 × 26
+# bricks lie flat in the 0.6 × 0.4 m box, and the pile reads about 1607 kg/m³ × 31 / 31.2 × 15 / 15.2 =
+# 1576 kg/m³ (apparent_density; 1607: the brick's mass over its 31 × 15 × 8 mm box times the share of
+# the floor under the rows). Measured at full scale (ordered_pile_full.yaml): 1568 as laid, 1601 once
+# the layers had settled onto each other; the experiment's: 1600.
+PILE_GAP = 0.0002
+
+
+
+class GeometrySpec(Strict):
+    slope_deg: Real(unit="°", gt=0.0, lt=90.0) = 45.0
+    launch_height: Real(unit="m", gt=0.0, le=100.0) = 1.0
+    board_length: Real(unit="m", gt=0.0, le=100.0) = 3.0
+    board_width: Real(unit="m", gt=0.0, le=100.0) = 4.0
+    box_depth: Real(unit="m", gt=0.0, le=10.0) = 0.6
+    box_width: Real(unit="m", gt=0.0, le=10.0) = 0.4
+    box_height: Real(unit="m", gt=0.0, le=10.0) = 0.2
+
+    def build(self) -> AvalancheGeometry:
+        return AvalancheGeometry(**self.model_dump())
+
+
+class BrickSpec(Strict):
+    length: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.031
+    width: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.015
+    thickness: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.008
+    density: Real(unit="kg/m³", gt=0.0, le=1e5) = 1700.0
+    layout: tuple[int, int, int] = (4, 2, 1)
+    bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see shapes/clump.py)
+    # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
+    # join the layout, and the brick gets the rounded solid's mass and inertia (shapes/clump.py). With them
+    # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
+    # (required with a bevel).
+    rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
+    # How the brick is realised (docs/bricks.md, "Kinds of brick"): `clump` (the layout above plus
+    # corner spheres) or `superquadric` (LIGGGHTS: one body with flat faces, this blockiness).
+    # Unset: the engine's preferred kind (AvalancheStudy.brick_spec), a clump when bevelled.
+    kind: ShapeKind | None = None
+    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
+
+    @model_validator(mode="after")
+    def _rounding_needs_a_box(self) -> "BrickSpec":
+        if self.rounding and self.bevel_deg:
+            raise ValueError(f"rounding: a bevelled brick has no corner spheres; allowed: 0 with bevel_deg > 0 (got {self.rounding!r})")
+        return self
+
+    def shape_entry(self, name: str = "brick") -> dict[str, object]:
+        """The case's `shapes` entry of this brick (a clump when `kind` is unset)."""
+        return {"name": name, "kind": self.kind or "clump", "length": self.length, "width": self.width, "thickness": self.thickness,
+                "layout": list(self.layout), "bevel_deg": self.bevel_deg, "rounding": self.rounding, "blockiness": list(self.blockiness)}
+
+    def build(self) -> BodyShape:
+        return BrickShape(**self.shape_entry()).body(self.density)
+
+
+class PairSpec(Strict):
+    en2: Real(unit="1", gt=0.0, le=1.0)
+    mu: Real(unit="1", ge=0.0, le=10.0)
+    kn: Real(unit="N/m", gt=0.0, le=1e12)
+    kt_over_kn: Real(unit="1", ge=0.0, le=10.0)
+
+
+class ContactSpec(Strict):
+    """Table 1 of Richefeu et al. (2012) by default; `box` is the release box (brick/box = brick/board)."""
+
+    law: Literal["linear", "bilinear"] = "bilinear"
+    brick_brick: PairSpec = PairSpec(en2=0.13, mu=0.86, kn=1e5, kt_over_kn=0.27)
+    brick_board: PairSpec = PairSpec(en2=0.53, mu=0.46, kn=1e5, kt_over_kn=0.42)
+
+
+class DensitySearchSpec(Strict):
+    """How the packing reaches its apparent density: μ brick/brick while packing varies within
+    `mu_bounds`, a whole packing per trial, until the pile is within `tolerance` of the target
+    (`density.py`). `max_trials: 1` packs once with the given contacts."""
+
+    tolerance: Real(unit="1", gt=0.0, le=0.5) = 0.02
+    max_trials: int = Field(default=4, ge=1, le=12)
+    mu_bounds: tuple[Real(unit="1", ge=0.0, le=10.0), Real(unit="1", ge=0.0, le=10.0)] = (0.0, 2.0)
+
+    @model_validator(mode="after")
+    def _ordered_bounds(self) -> "DensitySearchSpec":
+        if not self.mu_bounds[0] < self.mu_bounds[1]:
+            raise ValueError(f"mu_bounds: the lower bound must be below the upper; allowed: 0 ≤ low < high ≤ 10 (got {list(self.mu_bounds)})")
+        return self
+
+
+class PackingSpec(Strict):
+    kind: Literal["random_pour", "ordered_pile"] = "random_pour"
+    volume: Real(unit="m³", gt=0.0, le=10.0) = 0.04  # m³ of pile at the apparent density below
+    apparent_density: Real(unit="kg/m³", gt=0.0, le=1e4) | None = None  # default: 1000 (pour) or 1600 (pile)
+    settle_time: Real(unit="s", gt=0.0, le=100.0) = 1.0
+    # Set: settle_time is an upper bound and the packing ends once the bricks are at rest.
+    stop_at_rest: RestStop | None = None
+    # The paper changed contact parameters while packing to reach the target density, then restored
+    # them. Default: the study's own contacts. Give them explicitly to share one packing across
+    # studies (a campaign) that vary the contacts of the flow only.
+    contacts: ContactSpec | None = None
+    brick_brick_mu: Real(unit="1", ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing (the search's first trial)
+    density_search: DensitySearchSpec = DensitySearchSpec()
+    # Ordered pile only: turn each brick half a turn about a random axis, or not (the paper's flips).
+    flips: bool = False
+
+    @model_validator(mode="after")
+    def _flips_need_a_pile(self) -> "PackingSpec":
+        if self.flips and self.kind != "ordered_pile":
+            raise ValueError("flips: only for kind ordered_pile (a random pour orients every brick at random already)")
+        return self
+
+
+class ReleaseSpec(Strict):
+    duration: Real(unit="s", gt=0.0, le=1000.0) = 4.0
+    output_interval: Real(unit="s", gt=0.0, le=10.0) = 0.02
+    # Set: duration is an upper bound and the flow ends once the deposit is at rest (give `after`
+    # > 0: the bricks are at rest in the box at the opening).
+    stop_at_rest: RestStop | None = None
+    # Record every contact of the flow at each frame (results.h5 /contacts; the report then draws the
+    # deposit's force chains). Opt-in: it multiplies the output.
+    record_contacts: bool = False
+
+
+class AvalancheStudy(Strict):
+    name: Name
+    engine: Engine = Engine(DEFAULT_ENGINE)
+    seed: int = Field(default=2009, ge=1, le=2**31 - 1)
+    geometry: GeometrySpec = GeometrySpec()
+    brick: BrickSpec = BrickSpec()
+    contacts: ContactSpec = ContactSpec()
+    packing: PackingSpec = PackingSpec()
+    release: ReleaseSpec = ReleaseSpec()
+
+    @model_validator(mode="after")
+    def _packing_law(self) -> "AvalancheStudy":
+        if self.packing.contacts is not None and self.packing.contacts.law != self.contacts.law:
+            raise ValueError(
+                f"packing.contacts.law: must be {self.contacts.law!r} like contacts.law "
+                "(the flow continues the packing's contact history)"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _box_fits(self) -> "AvalancheStudy":
+        """The box must sit on the slope board, hold the packing's volume and at least two bricks each
+        way on its floor (a rain cell is a brick's bounding diameter and RAIN_GAP; a pile's cell a
+        brick and PILE_GAP), and be as high as a brick is thick."""
+        g, brick = self.geometry, self.brick_spec.build()
+        if g.launch_height / math.sin(math.radians(g.slope_deg)) + g.box_depth > g.board_length:
+            raise ValueError(f"geometry.box_depth: the box ({g.box_depth!r} m up the slope from the trap, "
+                             f"{g.launch_height / math.sin(math.radians(g.slope_deg)):.3g} m from the toe) runs past the slope board's top "
+                             f"end ({g.board_length!r} m); allowed: launch_height / sin(slope_deg) + box_depth ≤ board_length")
+        if g.box_width > g.board_width:
+            raise ValueError(f"geometry.box_width: {g.box_width!r} m is wider than the boards ({g.board_width!r} m); allowed: at most board_width")
+        capacity = g.box_depth * g.box_width * g.box_height
+        if self.packing.volume > capacity:
+            raise ValueError(f"packing.volume: {self.packing.volume!r} m³ does not fit the box ({capacity:.4g} m³: box_depth × box_width × "
+                             f"box_height); allowed: at most {capacity:.4g} m³ (the experiment's 40 l fill 40 of its 48 l)")
+        if self.brick_count < 1:
+            raise ValueError(f"packing.volume: {self.packing.volume!r} m³ at {self.target_density:g} kg/m³ is less than one brick "
+                             f"({brick.mass * 1e3:.3g} g); allowed: at least {brick.mass / self.target_density:.3g} m³")
+        if self.packing.kind == "random_pour":
+            cell = 2.0 * brick.bounding_radius + RAIN_GAP
+            need = {"box_depth": 2 * cell, "box_width": 2 * cell, "box_height": float(brick.extent[2])}
+        else:
+            need = {"box_depth": 2 * (brick.extent[0] + PILE_GAP), "box_width": 2 * (brick.extent[1] + PILE_GAP),
+                    "box_height": float(brick.extent[2]) + 2 * PILE_GAP}
+        for name, least in need.items():
+            if getattr(g, name) < least:
+                raise ValueError(f"geometry.{name}: {getattr(g, name)!r} m holds less than {'two bricks' if name != 'box_height' else 'one brick'} "
+                                 f"of a {self.packing.kind.replace('_', ' ')} ({least:.4g} m); allowed: at least {least:.4g} m")
+        return self
+
+    @property
+    def target_density(self) -> float:
+        if self.packing.apparent_density is not None:
+            return self.packing.apparent_density
+        return 1000.0 if self.packing.kind == "random_pour" else 1600.0
+
+    @property
+    def brick_spec(self) -> BrickSpec:
+        """The brick with its kind settled: as given, else the engine's preferred kind
+        (capabilities.preferred_brick: the superquadric on LIGGGHTS, chosen by measurement,
+        docs/bricks.md), a clump where that cannot be had (a bevelled brick)."""
+        if self.brick.kind is not None:
+            return self.brick
+        preferred = capabilities(self.engine).preferred_brick
+        return self.brick.model_copy(update={"kind": "clump" if self.brick.bevel_deg else preferred})
+
+    @property
+    def brick_count(self) -> int:
+        return brick_count(self.packing.volume, self.target_density, self.brick_spec.build())
