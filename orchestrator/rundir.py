@@ -41,7 +41,7 @@ from typing import Any
 import h5py
 from pydantic import BaseModel
 
-from orchestrator.case import Case, MeshWall
+from orchestrator.case import Case, CaseError, MeshWall
 from orchestrator.engines import get_adapter
 from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
 
@@ -158,11 +158,22 @@ class Busy(RuntimeError):
     """Another process holds the run directory's lock."""
 
 
+class Unlockable(CaseError):
+    """The run directory cannot be made or locked (read-only, or a file in its place): the message says which."""
+
+
 @contextlib.contextmanager
 def locked(directory: Path, wait: bool = True) -> Iterator[None]:
-    """Hold the directory's lock (created with the directory). wait=False raises Busy when held."""
-    directory.mkdir(parents=True, exist_ok=True)
-    with open(directory / LOCK, "a") as handle:
+    """Hold the directory's lock (created with the directory). wait=False raises Busy when held;
+    Unlockable when the directory or its lock file cannot be made."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        handle = open(directory / LOCK, "a")
+    except OSError as error:
+        if directory.exists() and not directory.is_dir():
+            raise Unlockable(f"{directory} is a file where the run's directory should be: move it away") from None
+        raise Unlockable(f"{directory} cannot be written ({error.strerror or error}): a run directory needs its lock file there") from None
+    with handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
         except OSError as error:
@@ -265,7 +276,11 @@ def retire(directory: Path, root: Path, only: tuple[str, ...] | None = None) -> 
     lock. only: move just these entries (those present), e.g. a study's products beside a campaign's record."""
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
     target = root / ATTIC / f"{directory.name}-{stamp}"
-    target.mkdir(parents=True)
+    try:
+        target.mkdir(parents=True)
+    except OSError as error:
+        raise CaseError(f"{root / ATTIC}: cannot keep what is set aside there ({error.strerror or error}); "
+                        "make it a writable directory (or move what stands in its place)") from None
     for entry in directory.iterdir():
         if entry.name not in KEPT and (only is None or entry.name in only):
             shutil.move(str(entry), target / entry.name)

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from orchestrator import __version__, rundir
-from orchestrator.case import Case
+from orchestrator.case import Case, CaseError
 from orchestrator.engines import EngineAdapter, EngineError, RunOptions, capabilities, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, log_tail
@@ -212,21 +212,35 @@ def ensure_run(
     in errors ("the packing run failed: …").
     """
     directory = root / rundir.run_id(case, case_dir=root)
-    with rundir.locked(directory, wait=True):
+    try:
+        with rundir.locked(directory, wait=True):
+            return _ensure_locked(case, root, directory, what, state_file, progress, timeout, options)
+    except rundir.Unlockable as error:
         required = state_file(directory)
-        state = rundir.status(directory, held=True, expected_id=directory.name)
-        if state == "completed" and (required is None or required.is_file()):
-            return directory, True
-        plan = make_plan(case, root)
-        set_aside = None
-        if rundir.holds_attempt(directory) and resume_point(plan, directory) is None:
-            why = (rundir.why_stale(directory, rundir.read_json(directory / RUN_RECORD) or {}, expected_id=directory.name)
-                   if state == "stale" else "its saved state is missing" if state == "completed" else f"it was {state}")
-            set_aside = {"attic": str(rundir.retire(directory, root)), "why": why}
-        try:
-            record = run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)
-        except EngineError as error:
-            raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
-        if set_aside:  # one line in its record: what was there before, why it no longer stood, where it went
-            rundir.write_record(directory, {**record, "set_aside": set_aside})
+        if directory.is_dir() and rundir.status(directory, held=True, expected_id=directory.name) == "completed" \
+                and (required is None or required.is_file()):
+            return directory, True  # a finished run in a read-only directory: read, never written
+        raise CaseError(f"the {what} directory: {error}; give a writable one") from None
+
+
+def _ensure_locked(case: Case, root: Path, directory: Path, what: str, state_file: Callable[[Path], Path | None],
+                   progress: Callable[[float, float], None] | None, timeout: float | None,
+                   options: RunOptions | None) -> tuple[Path, bool]:
+    """ensure_run with the directory's lock held."""
+    required = state_file(directory)
+    state = rundir.status(directory, held=True, expected_id=directory.name)
+    if state == "completed" and (required is None or required.is_file()):
+        return directory, True
+    plan = make_plan(case, root)
+    set_aside = None
+    if rundir.holds_attempt(directory) and resume_point(plan, directory) is None:
+        why = (rundir.why_stale(directory, rundir.read_json(directory / RUN_RECORD) or {}, expected_id=directory.name)
+               if state == "stale" else "its saved state is missing" if state == "completed" else f"it was {state}")
+        set_aside = {"attic": str(rundir.retire(directory, root)), "why": why}
+    try:
+        record = run_locked(case, root, directory, progress, timeout, get_adapter(case.engine.value, options), plan)
+    except EngineError as error:
+        raise EngineError(f"the {what} run failed: {error.summary}", error.deck, error.log, error.tail) from None
+    if set_aside:  # one line in its record: what was there before, why it no longer stood, where it went
+        rundir.write_record(directory, {**record, "set_aside": set_aside})
     return directory, False

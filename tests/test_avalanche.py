@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -197,9 +198,13 @@ def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(eng
     # after a change of LIGGGHTS' neighbour bins alone; a few bricks scatter by more than that contrast.
     slippery = study.model_copy(update={"contacts": study.contacts.model_copy(update={"brick_board": study.contacts.brick_board.model_copy(update={"mu": 0.25})})})
     packing_mtime = (packing_dir / RESULTS).stat().st_mtime_ns
-    second = run_study(slippery, tmp_path / "second", packings=packings)
+    # Run into the same directory: the finished release was made from other inputs, so it is set aside
+    # (kept in the attic beside it, with the reason) and the study runs again; its packing is reused.
+    second = run_study(slippery, tmp_path / "first", packings=packings)
     assert second["packing"]["reused"] is True and second["packing"]["directory"] == str(packing_dir)
-    assert second["finished_before"] is False
+    assert second["finished_before"] is False and "made from other inputs" in second["set_aside"]["why"]
+    kept = Path(second["set_aside"]["attic"])
+    assert json.loads((kept / "report.json").read_text())["deposit"] == deposit and (kept / "run" / RESULTS).is_file()
     assert (packing_dir / RESULTS).stat().st_mtime_ns == packing_mtime
     assert len([d for d in packings.iterdir() if d.is_dir()]) == 1
     assert second["deposit"]["x_cm"] > deposit["x_cm"]  # less friction on the boards: the mass travels further
@@ -329,3 +334,27 @@ def test_packing_verdict_passes_within_its_tolerance_and_blames_a_small_box() ->
     assert packing_verdict(940.0, 1000.0, full / 1.5) == "off by -6%"  # a box near the experiment's: no excuse
     small = packing_verdict(820.0, 1000.0, 0.148 * 0.099)
     assert small.startswith("off by -18%: expected") and "1/16 of the experiment's floor" in small
+
+
+def test_the_report_shows_the_opening_beside_fig9_and_the_demo_beside_the_study_codes_ranges() -> None:
+    """The table's rows of the initial state: the slab's points always, Fig. 9's for the experiment's box;
+    the demo's deposit rows carry the study code's ranges for the demo (validation record)."""
+    from orchestrator.cli.avalanche import demo_ranges
+    from orchestrator.studies.avalanche.report import comparison_rows
+    from orchestrator.studies.avalanche.study import load_study
+
+    initial = {"x_cm": -1.152, "z_cm": 1.272, "rear_x": -1.432, "rear_z": 1.432, "bulk_volume": 0.0408, "apparent_density": 981.0,
+               "bodies_outside_box": 0, "slab_x_cm": -1.153, "slab_z_cm": 1.271, "slab_rear_x": -1.424, "slab_rear_z": 1.424}
+    deposit_keys = ("length", "runout", "width", "height", "x_cm", "travel_angle_cm_deg", "fahrboschung_deg", "outliers")
+    report = {"deposit": dict.fromkeys(deposit_keys, 1.0), "front": {"max_velocity": 1.0, "final_position": 1.0,
+              "position": [0.0], "velocity": [1.0]}, "initial": initial}
+    full = {**report, "study": load_study(Path(__file__).parent.parent / "cases" / "avalanche" / "random_pour_full.yaml").model_dump(mode="json")}
+    rows = {name: reference for name, _, reference, _ in comparison_rows(full, {})}
+    assert rows["opening: centre of mass x (m)"] == "slab: -1.153; Fig. 9: ≈ -1.15"
+    assert rows["opening: rear of the base z (m)"] == "slab: 1.424; Fig. 9: ≈ 1.41"
+    assert demo_ranges(full) is None and rows["R (m)"] == ""
+    demo = {**report, "study": load_study(Path(__file__).parent.parent / "cases" / "avalanche" / "small.yaml").model_dump(mode="json")}
+    ranges = demo_ranges(demo)
+    rows = {name: reference for name, _, reference, _ in comparison_rows(demo, {}, ranges)}
+    assert rows["R (m)"].startswith(f"{ranges['runout'][0]:.3g}–{ranges['runout'][1]:.3g} (study's code")
+    assert "Fig. 9" not in rows["opening: centre of mass x (m)"]

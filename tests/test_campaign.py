@@ -78,7 +78,7 @@ def test_jobs_below_one_write_nothing_and_workers_are_capped_at_the_points_to_ru
     assert not out.exists()
     workers: list[tuple[str, int]] = []
 
-    def local(plan: execute.Plan, jobs: int):  # no engine: every point reported failed, nothing written
+    def local(plan: execute.LaunchPlan, jobs: int):  # no engine: every point reported failed, nothing written
         workers.append(("local", jobs))
         yield from ({"run_id": identifier, "status": "failed", "error": "not run"} for identifier in plan.to_run)
 

@@ -111,7 +111,7 @@ def test_the_shipped_packings_pass_the_shape_checks_quickly() -> None:
     ({"packing": {"volume": 1e-7}}, r"^packing\.volume: 1e-07 m³ at 1000 kg/m³ is less than one brick"),
     ({"geometry": {"box_depth": 2.0}}, r"^geometry\.box_depth: the box .* runs past the slope board's top end"),
     ({"geometry": {"box_width": 5.0}}, r"^geometry\.box_width: 5\.0 m is wider than the boards"),
-    ({"packing": {"kind": "ordered_pile", "volume": 0.001}, "geometry": {"box_depth": 0.03}}, r"^geometry\.box_depth: 0\.03 m holds less than two bricks of a ordered pile"),
+    ({"packing": {"kind": "ordered_pile", "volume": 0.001}, "geometry": {"box_depth": 0.03}}, r"^geometry\.box_depth: 0\.03 m holds less than two bricks of an ordered pile"),
 ])
 def test_a_study_box_that_cannot_work_is_a_field_error(fields: dict, message: str) -> None:
     from orchestrator.studies.avalanche.study import KIND
@@ -136,3 +136,32 @@ def test_a_study_that_fails_before_making_anything_leaves_no_directory(tmp_path:
     with pytest.raises(CaseError):
         run_study(tiny_study("liggghts"), tmp_path / "kept")
     assert (tmp_path / "kept" / "notes.txt").read_text() == "mine"  # a directory the user made stays as it was
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_packings_directory_trouble_is_a_field_error_and_a_finished_packing_in_a_read_only_directory_is_read(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A file where the packing's directory (or the attic) should be: one error naming it, no traceback.
+    A directory that cannot be written (its lock file cannot be made) still serves a finished packing."""
+    case = free_fall_case("liggghts")
+    root = tmp_path / "packings"
+    root.mkdir()
+    (root / rundir.run_id(case, case_dir=root)).write_text("not a directory")
+    with pytest.raises(CaseError, match=r"^the packing directory: .* is a file where the run's directory should be: move it away"):
+        ensure_run(case, root, "packing")
+    directory, _ = ensure_run(case, tmp_path / "fine", "packing")
+    (tmp_path / "fine" / "attic").write_text("in the attic's place")
+    (directory / "results.h5").write_bytes(b"damaged")  # to be set aside: the attic is needed
+    with pytest.raises(CaseError, match=r"attic: cannot keep what is set aside there"):
+        ensure_run(case, tmp_path / "fine", "packing")
+    (tmp_path / "fine" / "attic").unlink()
+    directory, _ = ensure_run(case, tmp_path / "fine", "packing")  # made again
+
+    def read_only(path: Path, wait: bool = True) -> None:
+        raise rundir.Unlockable(f"{path} cannot be written (Read-only file system): a run directory needs its lock file there")
+
+    monkeypatch.setattr(rundir, "locked", read_only)
+    assert ensure_run(case, tmp_path / "fine", "packing") == (directory, True)
+    with pytest.raises(CaseError, match=r"^the packing directory: .*Read-only file system.*; give a writable one"):
+        ensure_run(case, tmp_path / "elsewhere", "packing")

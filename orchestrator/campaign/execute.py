@@ -152,7 +152,7 @@ class Counts:
 
 
 @dataclass
-class Plan:
+class LaunchPlan:
     """What a launch will do: every point, and which of them need running."""
 
     campaign_dir: Path
@@ -167,7 +167,7 @@ class Plan:
     options: RunOptions = field(default_factory=RunOptions)
 
 
-def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> Plan:
+def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> LaunchPlan:
     spec, base = load_campaign(campaign_file)
     kind = base_kind(spec, base)
     base_path = (campaign_file.parent / spec.base).resolve()
@@ -192,10 +192,10 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
             to_run.append(identifier)
         else:
             skipped[identifier] = state
-    return Plan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
+    return LaunchPlan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
 
 
-def _arguments(plan: Plan, identifier: str) -> tuple[str, str, str, float | None, str, bool, dict[str, Any]]:
+def _arguments(plan: LaunchPlan, identifier: str) -> tuple[str, str, str, float | None, str, bool, dict[str, Any]]:
     directory = str(store.run_dir(plan.campaign_dir, identifier))
     return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind, plan.rerun_failed,
             plan.options.as_dict())
@@ -212,7 +212,7 @@ def start_worker(campaign: int) -> None:
         os._exit(1)
 
 
-def local_results(plan: Plan, jobs: int) -> Iterator[dict[str, Any]]:
+def local_results(plan: LaunchPlan, jobs: int) -> Iterator[dict[str, Any]]:
     """Run on a local process pool; yields each run's summary as it finishes."""
     context = multiprocessing.get_context("spawn")
     with futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=start_worker, initargs=(os.getpid(),)) as pool:
@@ -228,7 +228,7 @@ def local_cluster(jobs: int) -> Any:
     return LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None)
 
 
-def dask_results(plan: Plan, jobs: int, address: str | None = None, start: Callable[[int], Any] | None = None) -> Iterator[dict[str, Any]]:
+def dask_results(plan: LaunchPlan, jobs: int, address: str | None = None, start: Callable[[int], Any] | None = None) -> Iterator[dict[str, Any]]:
     """Run on Dask: a scheduler at `address` (e.g. from dask-jobqueue), or a cluster of `jobs` workers
     that `start(jobs)` starts (default: local_cluster) and this closes."""
     from distributed import Client, as_completed

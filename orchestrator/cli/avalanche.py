@@ -98,8 +98,15 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
         console.print(f"already complete in {outdir / 'run'} (delete that directory to run it again); measured again")
     if packing.get("directory"):
         console.print(f"packing: {'reused' if packing.get('reused') else 'made'} {packing['directory']}")
+    for trial in packing.get("trials", []):
+        if trial.get("set_aside"):
+            console.print(f"[yellow]set aside[/] an earlier packing {trial['directory']} ({trial['set_aside']['why']}): {trial['set_aside']['attic']}")
     if packing.get("warning"):
         console.print(f"[yellow]warning:[/] {packing['warning']}")
+    lost = int(report.get("deposit", {}).get("bodies_lost", 0))
+    if lost:
+        console.print(f"[yellow]warning:[/] {lost} of {packing.get('bricks', '?')} bricks left the boards over an edge during the release "
+                      "(counted as lost, in no other figure; longer or wider boards keep them)")
     try:
         page = write_study_report(outdir, report, study.geometry.slope_deg)
         console.print(study_table(f"{study.name} on {study.engine.value}", report))

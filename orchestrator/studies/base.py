@@ -98,7 +98,11 @@ class StudyKind:
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
               timeout: float | None, options: RunOptions) -> dict[str, Any]:
     created = not outdir.exists()
-    outdir.mkdir(parents=True, exist_ok=True)
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+        (outdir / STUDY_RECORD).touch()
+    except OSError as error:
+        raise CaseError(f"{outdir}: the study directory cannot be made or written ({error.strerror or error}); give another -o") from None
     try:
         return _run_study(kind, study, outdir, progress, shared, timeout, options)
     except BaseException:

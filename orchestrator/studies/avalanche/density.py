@@ -25,13 +25,15 @@ SAME_MU = 1e-3  # two trials closer than this in μ are one: the search has nowh
 @dataclass(frozen=True)
 class Trial:
     """One packing of the search: μ brick/brick while packing, the apparent density it reached
-    (kg/m³), its directory, whether it was already there, and its wall time (s)."""
+    (kg/m³), its directory, whether it was already there, its wall time (s), and what an earlier
+    attempt of the same packing left, set aside (its record's `set_aside`)."""
 
     mu: float
     apparent_density: float
     directory: str
     reused: bool
     wall_s: float
+    set_aside: dict[str, str] | None = None  # an earlier packing of this id that no longer stood: where it went, why
 
     def off(self, target: float) -> float:
         """Relative miss of the target density (signed)."""

@@ -190,7 +190,7 @@ class AvalancheStudy(Strict):
         for name, least in need.items():
             if getattr(g, name) < least:
                 raise ValueError(f"geometry.{name}: {getattr(g, name)!r} m holds less than {'two bricks' if name != 'box_height' else 'one brick'} "
-                                 f"of a {self.packing.kind.replace('_', ' ')} ({least:.4g} m); allowed: at least {least:.4g} m")
+                                 f"of {'a random pour' if self.packing.kind == 'random_pour' else 'an ordered pile'} ({least:.4g} m); allowed: at least {least:.4g} m")
         return self
 
     @property

@@ -60,19 +60,20 @@ class AvalancheKind(StudyKind):
             label = "packing" if search.max_trials == 1 else f"packing, trial {len(trials) + 1} (μ brick/brick {mu:.3g})"
             directory, reused = ensure_run(packing_case(study, mu), root, "packing", lambda d: packing_state_file(study, d),
                                            progress(label) if progress else None, timeout, options)
+            record = read_json(directory / RUN_RECORD) or {}
             trials.append(Trial(mu, packed_density(study, directory), str(directory), reused,
-                                float((read_json(directory / RUN_RECORD) or {}).get("wall_time_s", float("nan")))))
+                                float(record.get("wall_time_s", float("nan"))), None if reused else record.get("set_aside")))
             if abs(trials[-1].off(target)) <= search.tolerance or len(trials) >= search.max_trials:
                 break
             mu = next_mu(trials, target, search.mu_bounds)
         best = closest(trials, target)
-        record: dict[str, Any] = {"brick_brick_mu": best.mu, "trials": [t.as_dict() for t in trials],
+        summary: dict[str, Any] = {"brick_brick_mu": best.mu, "trials": [t.as_dict() for t in trials],
                                   "target_reached": abs(best.off(target)) <= search.tolerance}
-        if not record["target_reached"]:
-            record["warning"] = (f"packing: apparent density {best.apparent_density:.0f} kg/m³ ({best.off(target):+.1%}) is the closest of "
+        if not summary["target_reached"]:
+            summary["warning"] = (f"packing: apparent density {best.apparent_density:.0f} kg/m³ ({best.off(target):+.1%}) is the closest of "
                                  f"{len(trials)} trial(s) to the target {target:g} ± {search.tolerance:.0%} (μ brick/brick {best.mu:.3g} "
                                  f"while packing; packing.density_search sets the trials and the bounds of μ)")
-        return packing_case(study, best.mu), Path(best.directory), best.reused, record
+        return packing_case(study, best.mu), Path(best.directory), best.reused, summary
 
     def state_file(self, study: AvalancheStudy, directory: Path) -> Path | None:
         return packing_state_file(study, directory)
