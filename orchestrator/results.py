@@ -66,6 +66,7 @@ def read_json(path: Path) -> dict | None:
         return None
     return data if isinstance(data, dict) else None
 
+
 def safe_output_path(directory: Path, name: str) -> Path:
     """`directory / name`, made safe to write through: a writer opens it by name and would follow a
     symbolic link there (out of `directory`, overwriting its target) or write into a file hard-linked

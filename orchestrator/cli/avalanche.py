@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any, Callable
 
@@ -46,13 +47,19 @@ def write_study_report(outdir: Path, report: dict[str, Any], slope_deg: float) -
 def demo_ranges(report: dict[str, Any]) -> dict[str, Any] | None:
     """The study's code's ranges for the demo (validation record) when `report` is the demo's set-up
     (its geometry and volume), else None."""
-    from orchestrator.studies.avalanche.study import load_study
     from orchestrator.studies.validation_page import demo_reference
 
-    demo = load_study(DEMO_STUDY)
     study = report.get("study", {})
-    same = study.get("geometry") == demo.geometry.model_dump(mode="json") and study.get("packing", {}).get("volume") == demo.packing.volume
-    return demo_reference() if same else None
+    return demo_reference() if (study.get("geometry"), study.get("packing", {}).get("volume")) == _demo_set_up() else None
+
+
+@functools.lru_cache(maxsize=1)
+def _demo_set_up() -> tuple[dict[str, Any], float]:
+    """The demo's geometry (as a report records it) and packing volume, read once."""
+    from orchestrator.studies.avalanche.study import load_study
+
+    demo = load_study(DEMO_STUDY)
+    return demo.geometry.model_dump(mode="json"), demo.packing.volume
 
 
 def study_table(title: str, report: dict[str, Any]) -> Table:

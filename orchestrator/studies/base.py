@@ -100,15 +100,18 @@ def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress
     created = not outdir.exists()
     try:
         outdir.mkdir(parents=True, exist_ok=True)
-        (outdir / STUDY_RECORD).touch()
     except OSError as error:
-        raise CaseError(f"{outdir}: the study directory cannot be made or written ({error.strerror or error}); give another -o") from None
+        raise _unwritable(outdir, error) from None
     try:
         return _run_study(kind, study, outdir, progress, shared, timeout, options)
     except BaseException:
         if created and not any(entry.name != STUDY_RECORD for entry in outdir.iterdir()):
             shutil.rmtree(outdir, ignore_errors=True)  # a study that failed before making anything leaves no directory
         raise
+
+
+def _unwritable(outdir: Path, error: OSError) -> CaseError:
+    return CaseError(f"{outdir}: the study directory cannot be made or written ({error.strerror or error}); give another -o")
 
 
 def study_products(kind: StudyKind) -> tuple[str, ...]:
@@ -135,7 +138,10 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
     record = outdir / f"{kind.preparation}.json"
     study_id = rundir.run_id(study)
     set_aside = _set_aside_other_study(kind, outdir, study_id)
-    rundir.write_json_atomic(outdir / STUDY_RECORD, {"study_id": study_id, "kind": kind.name})
+    try:
+        rundir.write_json_atomic(outdir / STUDY_RECORD, {"study_id": study_id, "kind": kind.name})
+    except OSError as error:
+        raise _unwritable(outdir, error) from None
     finished_before = (release_dir / RESULTS).exists()
     if not finished_before:
         root = shared if shared is not None else outdir.resolve().parent / kind.shared_dir
