@@ -30,7 +30,7 @@ sys.path.insert(0, str(REPO))
 
 from orchestrator.engines.cocd.solver import Scene, Walls, step  # noqa: E402
 from orchestrator.studies.collapse.spec import parse_collapse
-from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
+from orchestrator.studies.collapse.cases import preparation_case  # noqa: E402
 from orchestrator.physics import sphere_mass  # noqa: E402
 
 RESULT = REPO / "docs" / "benchmarks" / "cocd_solvers.json"

@@ -41,14 +41,15 @@ from orchestrator.case import RestStop  # noqa: E402
 from orchestrator.studies.avalanche.study import AvalancheStudy, ContactSpec, packing_case, load_study, packing_state_file, release_case
 from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.studies.collapse.spec import load_collapse
-from orchestrator.studies.collapse.spec import preparation_case  # noqa: E402
-from orchestrator.studies.collapse.spec import release_case as collapse_release_case  # noqa: E402
+from orchestrator.studies.collapse.cases import preparation_case  # noqa: E402
+from orchestrator.studies.collapse.cases import release_case as collapse_release_case  # noqa: E402
 from orchestrator.validation import with_engine as collapse_with_engine  # noqa: E402
 from orchestrator.engines.liggghts import adapter as liggghts  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
 from orchestrator.runner import ensure_run  # noqa: E402
-from orchestrator.runner import RESULTS, run_case  # noqa: E402
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case  # noqa: E402
 
 FULL_SCALE = REPO / "cases" / "avalanche" / "random_pour_full.yaml"
 HORIZONTAL = REPO / "cases" / "collapse" / "horizontal.yaml"

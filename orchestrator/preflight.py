@@ -28,7 +28,8 @@ from orchestrator.case import Case, CaseError
 from orchestrator.estimate import OutputEstimate
 from orchestrator.capabilities import capabilities
 from orchestrator.preflight_shapes import check_shaped_bodies
-from orchestrator.results import CASE_COPY, RUN_RECORD, read_json
+from orchestrator.results import CASE_COPY, read_json
+from orchestrator.rundir import read_record
 
 MAX_STEP_FRACTION = 0.1  # of the shortest contact duration: 10 steps per contact at the least
 MAX_TRAVEL_PER_STEP = 0.1  # of the smallest body radius
@@ -148,7 +149,7 @@ def check_initial_state(case: Case, case_dir: Path) -> None:
     name = capabilities(case.engine).state_file
     if not source.is_file():
         raise CaseError(f"initial_state: no state file at {source} (write one with `save_state: true`)")
-    record, saved = read_json(source.parent / RUN_RECORD) or {}, read_json(source.parent / CASE_COPY) or {}
+    record, saved = read_record(source.parent) or {}, read_json(source.parent / CASE_COPY) or {}
     if source.name != name or record.get("status") != "completed" or not saved.get("save_state"):
         raise CaseError(f"initial_state: {source} is not a state this package wrote: give the {name} of a completed run "
                         "made with `save_state: true`")

@@ -33,7 +33,7 @@ import json
 import os
 import shutil
 import stat
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -42,7 +42,6 @@ import h5py
 from pydantic import BaseModel
 
 from orchestrator.case import Case, CaseError, MeshWall
-from orchestrator.engines import get_adapter
 from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
 
 LOCK = ".lock"
@@ -71,11 +70,8 @@ def now() -> str:
 SCHEMA_VERSION = 1
 
 
-def build_stamp(engine: str) -> dict[str, Any]:
-    """What turns inputs into results besides the inputs: engine, its version (asked of the engine),
-    the hash of the code and templates that write its deck, and of its compiled contact plugin."""
-    adapter = get_adapter(engine)
-    return {"engine": engine, "version": adapter.info().version, **adapter.build_inputs()}
+Build = dict[str, Any]  # an engine build's stamp (engines.build_stamp): engine, version, code and plugin hashes
+Builds = Callable[[str], Build]  # engine name → today's build stamp (engines.build_stamp)
 
 
 def canonical_inputs(inputs: BaseModel) -> dict[str, Any]:
@@ -122,16 +118,15 @@ def _content_digest(path: str, size: int, mtime_ns: int) -> str:
     return digest.hexdigest()
 
 
-def run_id(inputs: BaseModel, build: dict[str, Any] | None = None, case_dir: Path | None = None,
-           files: dict[str, str] | None = None) -> str:
-    """16 hex digits of sha256 over the inputs' non-default fields, the schema version, the content of
-    every file they name (`files`, else read now from case_dir) and the build (else today's)."""
-    engine = getattr(inputs, "engine").value
+def run_id(inputs: BaseModel, build: Build, case_dir: Path | None = None, files: dict[str, str] | None = None) -> str:
+    """The one run id: 16 hex digits of sha256 over the inputs' non-default fields, the schema version,
+    the content of every file they name (`files`, else read now from case_dir) and the engine build
+    that runs them (engines.build_stamp of the inputs' engine)."""
     stamp: dict[str, Any] = {
         "schema": SCHEMA_VERSION,
         "inputs": identity_inputs(inputs),
         "files": files if files is not None else file_digests(inputs, case_dir),
-        "build": build if build is not None else build_stamp(engine),
+        "build": build,
     }
     return hashlib.sha256(json.dumps(stamp, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
 
@@ -151,6 +146,18 @@ def write_record(directory: Path, record: dict[str, Any]) -> None:
     if record.get("status") not in STATUSES:
         raise ValueError(f"run.json: status {record.get('status')!r} is not one of {STATUSES}")
     write_json_atomic(directory / RUN_RECORD, record)
+
+
+def read_record(directory: Path) -> dict[str, Any] | None:
+    """The one reader of run.json: the record of the run in `directory`, or None when there is none
+    (or it does not read as a JSON mapping)."""
+    return read_json(directory / RUN_RECORD)
+
+
+def record_failure(directory: Path, kind: str, summary: str, tail: tuple[str, ...] | list[str]) -> None:
+    """run.json of a run that failed before its runner recorded anything (its inputs refused, a
+    study's stage failed): the kind, the one-line error and the engine log's tail."""
+    write_record(directory, {"status": "failed", "kind": kind, "error": summary, "log_tail": list(tail)})
 
 
 # -- locking ------------------------------------------------------------------------------------
@@ -209,36 +216,37 @@ def results_readable(path: Path) -> bool:
         return False
 
 
-def status(directory: Path, inputs_model: type[BaseModel] = Case, check_build: bool = True, held: bool = False,
+def status(directory: Path, inputs_model: type[BaseModel] = Case, *, builds: Builds | None, held: bool = False,
            expected_id: str | None = None) -> str:
     """pending | running | completed | failed | stale | incomplete.
 
     running: a process holds the lock. completed: the record says so, the results read back and
-    `why_stale` finds nothing (its case.json hashes to its id with today's build, its sealed
+    `why_stale` finds nothing (its case.json hashes to its id, its build is today's per `builds`, its sealed
     outputs are intact, and its id is `expected_id` when the directory stands for one); a completed
     run that fails those checks is stale. incomplete: its process died before it finished. held: the
-    caller holds the lock (so do not probe it).
+    caller holds the lock (so do not probe it). builds: engine → today's build (engines.build_stamp);
+    None leaves the build unchecked.
     """
     if not held and is_locked(directory):
         return "running"
     if not holds_attempt(directory):
         return "pending"
-    record = read_json(directory / RUN_RECORD)
+    record = read_record(directory)
     if record is None:
         return "incomplete"
     if record.get("status") == "failed":
         return "failed"
     if record.get("status") != "completed" or not results_readable(directory / str(record.get("results", RESULTS))):
         return "incomplete"
-    return "completed" if why_stale(directory, record, inputs_model, check_build, expected_id) is None else "stale"
+    return "completed" if why_stale(directory, record, inputs_model, builds, expected_id) is None else "stale"
 
 
-def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseModel] = Case, check_build: bool = True,
+def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseModel] = Case, builds: Builds | None = None,
               expected_id: str | None = None) -> str | None:
     """None when the completed run in `directory` may stand for its inputs today; else why not, in a
     few words: its saved inputs do not hash to its recorded id with its recorded build, its id is
-    not `expected_id` (the id its directory stands for), a sealed output changed, or (check_build)
-    its build is not today's."""
+    not `expected_id` (the id its directory stands for), a sealed output changed, or its build is not
+    today's (`builds`: engine → today's build stamp; None: not checked)."""
     build = record.get("build")
     if "run_id" not in record or not isinstance(build, dict):
         return "its record has no run id or build"
@@ -254,7 +262,7 @@ def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseMo
     broken = [name for name, value in (record.get("sealed") or {}).items() if _file_digest(directory / name) != value]
     if broken:
         return f"{', '.join(broken)} changed since it was sealed"
-    if check_build and build != build_stamp(str(build.get("engine", ""))):
+    if builds is not None and build != builds(str(build.get("engine", ""))):
         return "it was made by another build"
     return None
 

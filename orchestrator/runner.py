@@ -17,16 +17,15 @@ from typing import Any, Callable
 
 from orchestrator import __version__, rundir
 from orchestrator.case import Case, CaseError
-from orchestrator.engines import EngineAdapter, EngineError, RunOptions, capabilities, get_adapter
+from orchestrator.engines import EngineAdapter, EngineError, RunOptions, build_stamp, capabilities, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, log_tail
 from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import summary
 from orchestrator.post.lost import drop_lost, lost_bodies
-from orchestrator.results import Trajectory, write_results
+from orchestrator.results import RESULTS, RUN_RECORD, Trajectory, write_results
 
-RUN_RECORD, RESULTS = rundir.RUN_RECORD, rundir.RESULTS
 
 
 def render_case(case: Case, case_dir: Path, directory: Path) -> Path:
@@ -69,10 +68,10 @@ def resume_point(plan: RunPlan, directory: Path, adapter: EngineAdapter | None =
     """
     case = plan.case
     adapter = adapter or get_adapter(case.engine.value)
-    previous = rundir.read_json(directory / RUN_RECORD)
+    previous = rundir.read_record(directory)
     if adapter.checkpoint_ext is None or not previous or previous.get("status") != "running":
         return None
-    if previous.get("run_id") != (identity or rundir.run_id(case, case_dir=plan.case_dir)):
+    if previous.get("run_id") != (identity or rundir.run_id(case, build_stamp(case.engine.value), case_dir=plan.case_dir)):
         return None
     reached = adapter.last_frame_step(plan, directory)
     for step, path in reversed(adapter.usable_checkpoints(plan, directory)):
@@ -97,7 +96,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
     """run_case for a caller that already holds the directory's lock (a campaign worker, ensure_run)."""
     adapter = adapter or get_adapter(case.engine.value)
     plan = plan or make_plan(case, case_dir)
-    build = rundir.build_stamp(case.engine.value)
+    build = build_stamp(case.engine.value)
     files = rundir.file_digests(case, case_dir)
     identity = rundir.run_id(case, build, files=files)
     directory.mkdir(parents=True, exist_ok=True)
@@ -171,7 +170,7 @@ def _segments(plan: RunPlan, directory: Path) -> list[dict[str, Any]]:
     if resume is None:
         return [{"segment": 0, "started": rundir.now(), "from_time_s": 0.0}]
     dt = plan.schedule.dt
-    previous = rundir.read_json(directory / RUN_RECORD) or {}
+    previous = rundir.read_record(directory) or {}
     segments = list(previous.get("segments") or [{"segment": 0, "started": previous.get("started"), "from_time_s": 0.0}])
     segments[-1] = {**segments[-1], "reached_time_s": (resume.reached_step or 0) * dt}
     return segments + [{"segment": resume.segment, "started": rundir.now(), "from_time_s": resume.step * dt}]
@@ -211,13 +210,13 @@ def ensure_run(
     root/attic, and the new run's record says so (`set_aside`: where, and why). `what` names the run
     in errors ("the packing run failed: …").
     """
-    directory = root / rundir.run_id(case, case_dir=root)
+    directory = root / rundir.run_id(case, build_stamp(case.engine.value), case_dir=root)
     try:
         with rundir.locked(directory, wait=True):
             return _ensure_locked(case, root, directory, what, state_file, progress, timeout, options)
     except rundir.Unlockable as error:
         required = state_file(directory)
-        if directory.is_dir() and rundir.status(directory, held=True, expected_id=directory.name) == "completed" \
+        if directory.is_dir() and rundir.status(directory, builds=build_stamp, held=True, expected_id=directory.name) == "completed" \
                 and (required is None or required.is_file()):
             return directory, True  # a finished run in a read-only directory: read, never written
         raise CaseError(f"the {what} directory: {error}; give a writable one") from None
@@ -228,13 +227,13 @@ def _ensure_locked(case: Case, root: Path, directory: Path, what: str, state_fil
                    options: RunOptions | None) -> tuple[Path, bool]:
     """ensure_run with the directory's lock held."""
     required = state_file(directory)
-    state = rundir.status(directory, held=True, expected_id=directory.name)
+    state = rundir.status(directory, builds=build_stamp, held=True, expected_id=directory.name)
     if state == "completed" and (required is None or required.is_file()):
         return directory, True
     plan = make_plan(case, root)
     set_aside = None
     if rundir.holds_attempt(directory) and resume_point(plan, directory) is None:
-        why = (rundir.why_stale(directory, rundir.read_json(directory / RUN_RECORD) or {}, expected_id=directory.name)
+        why = (rundir.why_stale(directory, rundir.read_record(directory) or {}, builds=build_stamp, expected_id=directory.name)
                if state == "stale" else "its saved state is missing" if state == "completed" else f"it was {state}")
         set_aside = {"attic": str(rundir.retire(directory, root)), "why": why}
     try:

@@ -108,6 +108,16 @@ def tiny_study(engine: str) -> AvalancheStudy:
     )
 
 
+def column_study(name: str, column: tuple[float, float], channel_length: float, settle_time: float, duration: float,
+                 **fields: Any) -> dict[str, Any]:
+    """A 2D collapse study file on a flat channel: a column (length, height) in m, the channel
+    `channel_length` long, rained for `settle_time` and released for `duration` (s), frames every
+    0.01 s; `fields` add or replace top-level sections."""
+    return {"name": name, "dimension": 2, "column": {"length": column[0], "height": column[1]},
+            "channel": {"slope_deg": 0.0, "length": channel_length}, "preparation": {"settle_time": settle_time},
+            "release": {"duration": duration, "output_interval": 0.01}, **fields}
+
+
 @pytest.fixture
 def no_engine_process(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fail the test if anything tries to start a process."""

@@ -13,7 +13,8 @@ from orchestrator.studies.avalanche.study import AvalancheStudy, packing_case, r
 from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 from orchestrator.rundir import saved_case
 
 from conftest import engine_params, requires_liggghts, tiny_study
@@ -324,7 +325,7 @@ def test_reference_numbers_fall_back_to_the_packaged_copy(monkeypatch: pytest.Mo
 
 
 def test_packing_verdict_passes_within_its_tolerance_and_blames_a_small_box() -> None:
-    from orchestrator.studies.avalanche.report import packing_verdict
+    from orchestrator.studies.avalanche.table import packing_verdict
 
     full = 0.6 * 0.4
     assert packing_verdict(1019.0, 1000.0, full) == "pass"  # the density search's default tolerance: 2 %
@@ -339,8 +340,8 @@ def test_packing_verdict_passes_within_its_tolerance_and_blames_a_small_box() ->
 def test_the_report_shows_the_opening_beside_fig9_and_the_demo_beside_the_study_codes_ranges() -> None:
     """The table's rows of the initial state: the slab's points always, Fig. 9's for the experiment's box;
     the demo's deposit rows carry the study code's ranges for the demo (validation record)."""
-    from orchestrator.cli.avalanche import demo_ranges
-    from orchestrator.studies.avalanche.report import comparison_rows
+    from orchestrator.studies.avalanche.table import demo_ranges
+    from orchestrator.studies.avalanche.table import comparison_rows
     from orchestrator.studies.avalanche.study import load_study
 
     initial = {"x_cm": -1.152, "z_cm": 1.272, "rear_x": -1.432, "rear_z": 1.432, "bulk_volume": 0.0408, "apparent_density": 981.0,

@@ -16,7 +16,8 @@ import pytest
 from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.case import parse_case
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import engine_params
 

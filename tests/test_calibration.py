@@ -12,7 +12,8 @@ import yaml
 from orchestrator.campaign.calibrate import calibrate, corner_offsets, corners, e2_error, load_calibration, read_measured, write_measured
 from orchestrator.case import load_case
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import requires_yade
 

@@ -16,11 +16,13 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from orchestrator import rundir
 from orchestrator.campaign import store
 from orchestrator.campaign import execute
 from orchestrator.campaign.execute import plan_campaign, run_campaign
 from orchestrator.campaign.spec import CampaignSpec, design_points, evaluate, expand, load_campaign
 from orchestrator.case import CaseError
+from orchestrator.engines import build_stamp
 from orchestrator.results import read_results
 
 from conftest import assert_one_line_error, requires_liggghts, run_cli
@@ -47,7 +49,7 @@ def test_designs_expand_as_documented(tmp_path: Path) -> None:
     spec, base = load_campaign(write_campaign(tmp_path, GRID, replicates=2, derived={"contacts.0.kt_over_kn": "contacts.0.mu * 0.5"}))
     expanded = expand(spec, base)
     assert len(expanded) == 2 * 3 * 2
-    assert len({store.run_id(case) for _, case in expanded}) == 12  # replicates differ by seed
+    assert len({rundir.run_id(case, build_stamp(case.engine.value)) for _, case in expanded}) == 12  # replicates differ by seed
     assert all(case.contacts[0].kt_over_kn == pytest.approx(0.25) for _, case in expanded)
     lhs = design_points(CampaignSpec.model_validate({"name": "x", "base": "b", "designs": [{"kind": "lhs", "samples": 10, "ranges": {"a": [0, 1], "b": [5, 6]}}]}).designs[0])
     assert len(lhs) == 10 and all(0 <= p["a"] <= 1 and 5 <= p["b"] <= 6 for p in lhs)
@@ -210,7 +212,7 @@ def test_a_shared_run_is_made_once_while_another_process_waits_for_it(tmp_path: 
     from orchestrator.runner import ensure_run
 
     case = free_fall_case("liggghts")
-    directory = tmp_path / rundir.run_id(case)
+    directory = tmp_path / rundir.run_id(case, build_stamp(case.engine.value))
     second: dict[str, object] = {}
 
     def arrive_while_running() -> None:
@@ -242,7 +244,7 @@ def test_a_random_pours_packing_hashes_to_its_run_id_when_read_back(tmp_path: Pa
     case = packing_case(load_study(REPO / "cases" / "avalanche" / "random_pour_full_kn2e4.yaml"))
     assert len(case.bodies.clumps) > 6000  # about one in 150 of its orientations moved
     rundir.save_inputs(tmp_path, case)
-    assert rundir.run_id(rundir.saved_case(tmp_path)) == rundir.run_id(case)
+    assert rundir.run_id(rundir.saved_case(tmp_path), build_stamp(case.engine.value)) == rundir.run_id(case, build_stamp(case.engine.value))
 
 
 @settings(max_examples=300, deadline=None)
@@ -287,7 +289,7 @@ def test_example_avalanche_campaign_is_nine_studies_on_one_packing() -> None:
     spec, base = load_campaign(REPO / "campaigns" / "avalanche_small_board_contacts.yaml")
     expanded = expand(spec, base)
     assert len(expanded) == 9 and all(isinstance(study, AvalancheStudy) for _, study in expanded)
-    assert len({store.run_id(study) for _, study in expanded}) == 9
+    assert len({rundir.run_id(study, build_stamp(study.engine.value)) for _, study in expanded}) == 9
     assert len({packing_key(study) for _, study in expanded}) == 1
 
 
@@ -301,7 +303,7 @@ def test_every_shipped_campaign_expands_to_valid_distinct_runs(path: Path) -> No
     spec, base = load_campaign(path)
     expanded = expand(spec, base)
     assert expanded, f"{path}: no points"
-    assert len({store.run_id(point) for _, point in expanded}) == len(expanded)
+    assert len({rundir.run_id(point, build_stamp(point.engine.value)) for _, point in expanded}) == len(expanded)
 
 
 @requires_liggghts

@@ -23,7 +23,7 @@ import pytest
 import yaml
 
 from orchestrator.case import Case, CaseError, parse_case
-from orchestrator.engines import RunOptions, get_adapter
+from orchestrator.engines import RunOptions, build_stamp, get_adapter
 from orchestrator.engines import checkpoint
 from orchestrator.engines.checkpoint import Resume, merge, next_segment, segment_files, segment_name
 from orchestrator.engines.liggghts import adapter as liggghts_adapter
@@ -286,7 +286,7 @@ def _cut_off(directory: Path, case: Case, status: str = "running", run_id: str |
 
     directory.mkdir(exist_ok=True)
     rundir.save_inputs(directory, case)
-    (directory / "run.json").write_text(json.dumps({"status": status, "run_id": run_id or rundir.run_id(case)}))
+    (directory / "run.json").write_text(json.dumps({"status": status, "run_id": run_id or rundir.run_id(case, build_stamp(case.engine.value))}))
     (directory / "engine.log").write_text("")
     for step in (50, 100, 150):
         (directory / f"checkpoint.{step}.npz").write_text(f"state {step}")

@@ -17,6 +17,7 @@ from orchestrator.studies.collapse.study import run_collapse
 from orchestrator.results import read_results
 from orchestrator.case import parse_case
 from orchestrator.runner import run_case
+from conftest import column_study
 
 G = 9.81
 
@@ -89,15 +90,7 @@ def test_frictionless_spheres_slide_apart() -> None:
     assert smallest_gap(scene) > -1e-9
 
 
-COLUMN = {
-    "name": "cocd_column",
-    "engine": "cocd",
-    "dimension": 2,
-    "column": {"length": 0.06, "height": 0.042},
-    "channel": {"slope_deg": 0.0, "length": 0.2},
-    "preparation": {"settle_time": 0.2},
-    "release": {"duration": 0.4, "output_interval": 0.01},
-}
+COLUMN = column_study("cocd_column", (0.06, 0.042), 0.2, settle_time=0.2, duration=0.4, engine="cocd")
 
 
 @pytest.fixture(scope="module")

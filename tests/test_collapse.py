@@ -17,22 +17,16 @@ import pytest
 from scipy.spatial import cKDTree
 
 from orchestrator.case import CaseError
-from orchestrator.studies.collapse.spec import BED_COVER, level, load_collapse, parse_collapse, preparation_case, rain_counts, release_case, rough_bed
+from orchestrator.studies.collapse.cases import level, preparation_case, release_case
+from orchestrator.studies.collapse.grains import BED_COVER, rain_counts, rough_bed
+from orchestrator.studies.collapse.spec import load_collapse, parse_collapse
 from orchestrator.studies.collapse.study import measure, run_collapse
 from orchestrator.rundir import saved_case
 from orchestrator.results import read_results
 
-from conftest import requires_liggghts
+from conftest import column_study, requires_liggghts
 
-TINY = {
-    "name": "tiny",
-    "dimension": 2,
-    "column": {"length": 0.03, "height": 0.021},
-    "channel": {"slope_deg": 0.0, "length": 0.12},
-    "preparation": {"settle_time": 0.25},
-    "release": {"duration": 0.5, "output_interval": 0.01},
-    "contacts": {"mu": 0.5},
-}
+TINY = column_study("tiny", (0.03, 0.021), 0.12, settle_time=0.25, duration=0.5, contacts={"mu": 0.5})
 
 
 @pytest.fixture(scope="module")

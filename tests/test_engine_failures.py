@@ -10,22 +10,30 @@ import pytest
 from orchestrator.engines import EngineError
 from orchestrator.engines.liggghts.adapter import LiggghtsAdapter
 from orchestrator.engines.yade.adapter import YadeAdapter
-from orchestrator.runner import RUN_RECORD, render_case, run_case
+from orchestrator.results import RUN_RECORD
+from orchestrator.runner import render_case, run_case
 
 from orchestrator.plan import make_plan
 from conftest import free_fall_case, requires_liggghts, requires_yade
 
 
+def broken_deck_error(engine: str, tmp_path: Path, text: str, broken: str) -> tuple[Path, Path, str]:
+    """Render the free fall for `engine`, replace `text` by `broken` in its deck, run the engine on it:
+    (deck, run directory, the EngineError's message)."""
+    rundir = tmp_path / "run"
+    case = free_fall_case(engine)
+    deck = render_case(case, tmp_path, rundir)
+    deck.write_text(deck.read_text().replace(text, broken))
+    adapter = LiggghtsAdapter() if engine == "liggghts" else YadeAdapter()
+    with pytest.raises(EngineError) as caught:
+        adapter.execute(make_plan(case, tmp_path), rundir)
+    return deck, rundir, str(caught.value)
+
+
 @requires_liggghts
 @pytest.mark.engine
 def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
-    rundir = tmp_path / "run"
-    case = free_fall_case("liggghts")
-    deck = render_case(case, tmp_path, rundir)
-    deck.write_text(deck.read_text().replace("pair_style      gran", "pair_style      grann"))
-    with pytest.raises(EngineError) as caught:
-        LiggghtsAdapter().execute(make_plan(case, tmp_path), rundir)
-    message = str(caught.value)
+    deck, rundir, message = broken_deck_error("liggghts", tmp_path, "pair_style      gran", "pair_style      grann")
     assert "ERROR" in message and "grann" in message, message
     assert str(deck) in message
     assert deck.exists() and (rundir / "engine.log").exists()
@@ -35,13 +43,8 @@ def test_corrupt_liggghts_deck_reports_log_tail(tmp_path: Path) -> None:
 @requires_yade
 @pytest.mark.engine
 def test_failing_yade_script_reports_traceback(tmp_path: Path) -> None:
-    rundir = tmp_path / "run"
-    case = free_fall_case("yade")
-    script = render_case(case, tmp_path, rundir)
-    script.write_text(script.read_text().replace("O.dt = DT", "O.dt = DT / undefined_name"))
-    with pytest.raises(EngineError) as caught:
-        YadeAdapter().execute(make_plan(case, tmp_path), rundir)
-    assert "undefined_name" in str(caught.value)
+    script, rundir, message = broken_deck_error("yade", tmp_path, "O.dt = DT", "O.dt = DT / undefined_name")
+    assert "undefined_name" in message
     assert script.exists() and (rundir / "engine.log").exists()
 
 

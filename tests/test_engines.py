@@ -11,7 +11,8 @@ import pytest
 from orchestrator.case import Case
 from orchestrator.results import ATTRIBUTES, LAYOUT, Trajectory, layout, read_results
 from orchestrator.validation import with_engine
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 from orchestrator.parity import slope_vectors, sliding_case
 
 from conftest import engine_params, free_fall_case, requires_liggghts, requires_yade

@@ -12,7 +12,8 @@ import pytest
 
 from orchestrator.case import Case, parse_case
 from orchestrator.results import Trajectory, read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 from orchestrator.parity import slope_vectors, sliding_case
 
 from conftest import engine_params

@@ -15,7 +15,7 @@ from orchestrator.campaign import store
 from orchestrator.campaign.execute import run_campaign
 from orchestrator.case import Case, parse_case
 from orchestrator.cli.main import main
-from orchestrator.engines import build, get_adapter
+from orchestrator.engines import build, build_stamp, get_adapter
 from orchestrator.imports import package_modules
 from orchestrator.plan import make_plan
 from orchestrator.runner import ensure_run, run_case
@@ -69,13 +69,13 @@ def test_a_run_made_before_a_brick_edit_is_stale_and_runs_again(monkeypatch: pyt
     the finished run reads `stale`, never `completed`, and the same case runs again."""
     case = free_fall_case("cocd")
     directory, reused = ensure_run(case, tmp_path, "free fall")
-    assert not reused and rundir.status(directory) == "completed"
+    assert not reused and rundir.status(directory, builds=build_stamp) == "completed"
     assert ensure_run(case, tmp_path, "free fall") == (directory, True)
     (tmp_path / "edited").mkdir()
     _edited_module(monkeypatch, tmp_path / "edited", "orchestrator.shapes.clump", "(fraction - 0.5)", "(fraction - 0.5000001)")
-    assert rundir.status(directory) == "stale"
+    assert rundir.status(directory, builds=build_stamp) == "stale"
     again, reused = ensure_run(case, tmp_path, "free fall")
-    assert not reused and again != directory and rundir.status(again) == "completed"
+    assert not reused and again != directory and rundir.status(again, builds=build_stamp) == "completed"
 
 
 def _mesh_case(tmp_path: Path, tilt: float) -> Path:
@@ -211,10 +211,10 @@ DEFAULTS = Path(__file__).with_name("identity_defaults.json")
 
 def current_defaults() -> dict[str, object]:
     """'Model.Section.field' → default (JSON) of every field of the case and the study models, from their JSON Schemas."""
-    from orchestrator.studies.registry import STUDY_KINDS
+    from orchestrator.studies.registry import LAUNCH_KINDS
 
     found: dict[str, object] = {}
-    for model in (Case, *(kind.model for kind in STUDY_KINDS.values())):
+    for model in (kind.model for kind in LAUNCH_KINDS.values()):
         schema = model.model_json_schema()
         sections = {model.__name__: schema, **{f"{model.__name__}.{name}": part for name, part in schema.get("$defs", {}).items()}}
         for section, part in sections.items():

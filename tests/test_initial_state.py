@@ -17,7 +17,8 @@ import pytest
 from orchestrator import parity
 from orchestrator.case import Case
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import requires_liggghts, requires_yade
 

@@ -13,6 +13,7 @@ from orchestrator import rundir
 from orchestrator.campaign import store
 from orchestrator.campaign.execute import perform
 from orchestrator.case import CaseError, parse_case
+from orchestrator.engines import build_stamp
 from orchestrator.plan import make_plan
 from orchestrator.runner import ensure_run, run_case
 from orchestrator.studies.avalanche.study import load_study, packing_case
@@ -30,10 +31,10 @@ def test_a_run_is_stale_in_a_directory_named_for_another_id(tmp_path: Path) -> N
     case = free_fall_case("liggghts")
     directory = tmp_path / "0123456789abcdef"
     run_case(case, tmp_path, directory)
-    assert rundir.status(directory) == "completed"  # as a plain run directory: its own record is sound
-    assert rundir.status(directory, expected_id="0123456789abcdef") == "stale"
+    assert rundir.status(directory, builds=build_stamp) == "completed"  # as a plain run directory: its own record is sound
+    assert rundir.status(directory, builds=build_stamp, expected_id="0123456789abcdef") == "stale"
     record = rundir.read_json(directory / "run.json")
-    assert rundir.status(directory, expected_id=record["run_id"]) == "completed"
+    assert rundir.status(directory, builds=build_stamp, expected_id=record["run_id"]) == "completed"
     assert "not the 0123456789abcdef its directory stands for" in rundir.why_stale(directory, record, expected_id="0123456789abcdef")
     assert store.status(directory) == "stale"  # a campaign point is named for its id
 
@@ -54,7 +55,7 @@ def test_a_packing_whose_saved_state_was_edited_is_set_aside_and_made_again(tmp_
     set_aside = rundir.read_json(directory / "run.json")["set_aside"]
     assert set_aside["why"] == "state.restart changed since it was sealed"
     assert (Path(set_aside["attic"]) / "state.restart").read_bytes() != state.read_bytes()  # the damaged file kept in the attic
-    assert rundir.status(directory, expected_id=directory.name) == "completed"
+    assert rundir.status(directory, builds=build_stamp, expected_id=directory.name) == "completed"
 
 
 def test_a_campaign_point_whose_mesh_changed_after_the_plan_is_not_run_into_the_old_points_directory(tmp_path: Path) -> None:
@@ -66,7 +67,7 @@ def test_a_campaign_point_whose_mesh_changed_after_the_plan_is_not_run_into_the_
     data = json.loads(free_fall_case("liggghts").model_dump_json())
     data["walls"] = [{"type": "mesh", "name": "floor", "material": "glass", "file": "floor.stl"}]
     case = parse_case(data)
-    planned = rundir.run_id(case, case_dir=tmp_path)
+    planned = rundir.run_id(case, build_stamp(case.engine.value), case_dir=tmp_path)
     floor.write_text(facet.format(-0.01))  # edited while the campaign runs
     directory = tmp_path / "runs" / planned
     summary = perform(case.model_dump_json(), str(directory), str(tmp_path), None)
@@ -147,7 +148,7 @@ def test_packings_directory_trouble_is_a_field_error_and_a_finished_packing_in_a
     case = free_fall_case("liggghts")
     root = tmp_path / "packings"
     root.mkdir()
-    (root / rundir.run_id(case, case_dir=root)).write_text("not a directory")
+    (root / rundir.run_id(case, build_stamp(case.engine.value), case_dir=root)).write_text("not a directory")
     with pytest.raises(CaseError, match=r"^the packing directory: .* is a file where the run's directory should be: move it away"):
         ensure_run(case, root, "packing")
     directory, _ = ensure_run(case, tmp_path / "fine", "packing")

@@ -14,7 +14,8 @@ from orchestrator.engines import EngineError
 from orchestrator.post.deposit import deposit_metrics
 from orchestrator.post.lost import NoBodyLeft, lost_bodies
 from orchestrator.results import Trajectory, read_results, write_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import assert_one_line_error, run_cli
 

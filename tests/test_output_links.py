@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 import yaml
 
-from orchestrator.cli.avalanche import write_study_report
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, safe_output_path, write_results
 from orchestrator.studies.avalanche import report as pictures
 
@@ -51,17 +50,17 @@ def test_the_study_report_replaces_links_in_report(tmp_path: Path, monkeypatch: 
     report = {"study": yaml.safe_load((REPO / "cases" / "avalanche" / "small.yaml").read_text())}
     for name in ("plot_deposit", "plot_front", "plot_force_chains"):  # what they draw is beside the point: they write by name
         monkeypatch.setattr(pictures, name, lambda *arguments, **options: arguments[-2 if len(arguments) > 2 else -1].write_text("figure"))
-    monkeypatch.setattr(pictures, "comparison_rows", lambda *arguments: [])
+    monkeypatch.setattr(pictures, "study_rows", lambda *arguments: [])
     outside = tmp_path / "outside.txt"
     outside.write_text("precious")
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     (study / "report").symlink_to(elsewhere, target_is_directory=True)
-    write_study_report(study, report, 45.0)
+    pictures.write_report(study, report)
     assert not (study / "report").is_symlink() and not list(elsewhere.iterdir())
     for name in ("index.html", "deposit.png", "bodies_0000.vtu", "snapshot_0000.png"):
         (study / "report" / name).unlink()
         (study / "report" / name).symlink_to(outside)
-    page = write_study_report(study, report, 45.0)
+    page = pictures.write_report(study, report)
     assert outside.read_text() == "precious" and page == study / "report" / "index.html"
     assert not any(path.is_symlink() for path in (study / "report").iterdir())

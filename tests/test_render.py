@@ -202,7 +202,8 @@ def test_large_boxes_get_capped_bins_and_the_same_motion(tmp_path: Path) -> None
 
     MAX_BINS = liggghts.deck.MAX_BINS
     from orchestrator.results import read_results
-    from orchestrator.runner import RESULTS, run_case
+    from orchestrator.results import RESULTS
+    from orchestrator.runner import run_case
 
     small = sliding_case("liggghts", duration=0.1)
     large = small.model_copy(update={"domain": Domain(lower=(-3.0, -2.5, -0.6), upper=(3.0, 2.5, 2.9))})

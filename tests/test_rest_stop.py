@@ -16,7 +16,8 @@ import pytest
 
 from orchestrator.case import Case, CaseError, parse_case
 from orchestrator.results import Trajectory, read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import engine_params, pile_case
 

@@ -13,7 +13,8 @@ import pytest
 
 from orchestrator.case import Case, parse_case
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import requires_liggghts, requires_yade
 
@@ -64,6 +65,13 @@ def measured_e2(case: Case, rundir: Path) -> float:
     return float(np.dot(after, after) / np.dot(before, before))
 
 
+def assert_bilinear_restitution_at_every_speed(engine: str, target: str, en2: float, rel: float, tmp_path: Path) -> None:
+    """e_n² measured from an impact at each of SPEEDS is `en2` within `rel`."""
+    for speed in SPEEDS:
+        e2 = measured_e2(impact_case(engine, "bilinear", en2, speed, target), tmp_path / f"v{speed}")
+        assert e2 == pytest.approx(en2, rel=rel), f"speed {speed} m/s"
+
+
 @requires_yade
 @pytest.mark.engine
 @pytest.mark.parametrize("target", ["sphere", "wall"])
@@ -73,9 +81,7 @@ def test_yade_restitution_is_speed_independent(target: str, en2: float, tmp_path
 
     Tolerance ±3 %; the remaining error is time discretisation at 50 steps per contact.
     """
-    for speed in SPEEDS:
-        e2 = measured_e2(impact_case("yade", "bilinear", en2, speed, target), tmp_path / f"v{speed}")
-        assert e2 == pytest.approx(en2, rel=0.03), f"speed {speed} m/s"
+    assert_bilinear_restitution_at_every_speed("yade", target, en2, 0.03, tmp_path)
 
 
 @requires_liggghts
@@ -84,9 +90,7 @@ def test_yade_restitution_is_speed_independent(target: str, en2: float, tmp_path
 @pytest.mark.parametrize("en2", [0.13, 0.53])
 def test_liggghts_bilinear_restitution_is_exact_at_every_speed(target: str, en2: float, tmp_path: Path) -> None:
     """The compiled bilinear law: ±1 %. Measured 0.1300-0.1301 and 0.5300-0.5301."""
-    for speed in SPEEDS:
-        e2 = measured_e2(impact_case("liggghts", "bilinear", en2, speed, target), tmp_path / f"v{speed}")
-        assert e2 == pytest.approx(en2, rel=0.01), f"speed {speed} m/s"
+    assert_bilinear_restitution_at_every_speed("liggghts", target, en2, 0.01, tmp_path)
 
 
 @requires_liggghts

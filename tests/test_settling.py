@@ -11,7 +11,8 @@ import pytest
 from orchestrator.post.summary import kinetic_energy
 from orchestrator.capabilities import capabilities
 from orchestrator.results import Trajectory, read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import engine_params, requires_liggghts, BRICK, pile_case
 

@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 from orchestrator import rundir
 from orchestrator.cli.main import main
-from orchestrator.engines import get_adapter
+from orchestrator.engines import build_stamp, get_adapter
 from orchestrator.results import read_results
 from orchestrator.slurm import record
 from orchestrator.slurm.commands import SlurmError, parse_job_id, submission_environment
@@ -69,7 +69,8 @@ def test_the_default_run_directory_is_named_by_the_run_id(case_file: Path, tmp_p
     assert code == 0, output
     from orchestrator.case import load_case
 
-    identity = rundir.run_id(load_case(case_file), case_dir=tmp_path)
+    case = load_case(case_file)
+    identity = rundir.run_id(case, build_stamp(case.engine.value), case_dir=tmp_path)
     assert f"--output={tmp_path}/runs/pressed-liggghts-{identity}/jobs/slurm-%j.out" in output
     assert not (tmp_path / "runs").exists()  # a dry run writes nothing
 
@@ -141,11 +142,11 @@ def test_the_scheduler_refusing_the_job_is_one_line(case_file: Path, tmp_path: P
 def test_the_jobs_stay_in_the_run_directory_when_an_attempt_is_retired(tmp_path: Path) -> None:
     directory = tmp_path / "run"
     record.update(directory, "7", restart=0)
-    assert rundir.status(directory) == "pending"  # submitted, not started: the jobs are no attempt
+    assert rundir.status(directory, builds=build_stamp) == "pending"  # submitted, not started: the jobs are no attempt
     rundir.write_record(directory, {"status": "failed"})
-    assert rundir.status(directory) == "failed"
+    assert rundir.status(directory, builds=build_stamp) == "failed"
     rundir.retire(directory, tmp_path)
-    assert rundir.status(directory) == "pending" and record.last_job(directory) == {"job_id": "7", "restart": 0}
+    assert rundir.status(directory, builds=build_stamp) == "pending" and record.last_job(directory) == {"job_id": "7", "restart": 0}
 
 
 # -- jobs that run ---------------------------------------------------------------------------------
@@ -200,4 +201,4 @@ def test_a_cut_job_is_not_resubmitted_past_max_restarts_nor_without_progress(cas
     assert len(fake_slurm.jobs()) == 3
     last = record.read(directory)["jobs"][-1]
     assert last["restart"] == 1 and last["outcome"] == "cut" and "--max-restarts 1" in last["note"]
-    assert rundir.status(directory) == "incomplete" and (directory / "jobs" / "job.sbatch").exists()
+    assert rundir.status(directory, builds=build_stamp) == "incomplete" and (directory / "jobs" / "job.sbatch").exists()

@@ -17,7 +17,8 @@ import pytest
 from orchestrator import physics
 from orchestrator.case import Case, parse_case
 from orchestrator.results import read_results
-from orchestrator.runner import RESULTS, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import run_case
 
 from conftest import engine_params
 

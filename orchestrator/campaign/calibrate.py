@@ -28,8 +28,9 @@ from pydantic import Field
 from orchestrator.shapes.clump import quaternion_matrix
 from orchestrator.validation import parse_model, read_yaml
 from orchestrator.case import Case, CaseError, Name, Strict, parse_case
-from orchestrator.results import Trajectory, read_results
-from orchestrator.runner import RESULTS
+from orchestrator import rundir
+from orchestrator.engines import build_stamp
+from orchestrator.results import RESULTS, Trajectory, read_results
 from orchestrator.campaign import store
 from orchestrator.campaign.execute import perform
 from orchestrator.campaign.spec import ParameterPath, set_path
@@ -116,8 +117,8 @@ class Calibration:
             set_path(data, parameter.path, float(value))
         return parse_case(data, source=f"{self.spec.name} evaluation")
 
-    def error_of(self, case: Case) -> float:
-        directory = store.run_dir(self.directory, store.run_id(case, self.base_dir))
+    def error_of(self, case: Case, directory: Path) -> float:
+        """E2 of the completed run of `case` in `directory` against the measured corners."""
         trajectory = read_results(directory / RESULTS)
         shape = case.shapes[0]
         sim = corners(trajectory, 0, corner_offsets(shape.length, shape.width, shape.thickness))
@@ -141,9 +142,10 @@ def evaluate_batch(calibration: Calibration, batch: list[np.ndarray], record: Ca
     from orchestrator.engines.base import die_with_parent
 
     cases = [calibration.case_for(values) for values in batch]
+    identifiers = [rundir.run_id(case, build_stamp(case.engine.value), case_dir=calibration.base_dir) for case in cases]
     todo = []
-    for case in cases:
-        directory = store.run_dir(calibration.directory, store.run_id(case, calibration.base_dir))
+    for case, identifier in zip(cases, identifiers):
+        directory = store.run_dir(calibration.directory, identifier)
         if store.status(directory) != "completed":
             if directory.exists():
                 store.retire(directory, calibration.directory)
@@ -153,10 +155,10 @@ def evaluate_batch(calibration: Calibration, batch: list[np.ndarray], record: Ca
         with futures.ProcessPoolExecutor(max_workers=calibration.spec.jobs, mp_context=context, initializer=die_with_parent) as pool:
             list(pool.map(perform, *zip(*todo)))
     errors = []
-    for values, case in zip(batch, cases):
-        identifier = store.run_id(case, calibration.base_dir)
-        if store.status(store.run_dir(calibration.directory, identifier)) == "completed":
-            error = calibration.error_of(case)
+    for values, case, identifier in zip(batch, cases, identifiers):
+        directory = store.run_dir(calibration.directory, identifier)
+        if store.status(directory) == "completed":
+            error = calibration.error_of(case, directory)
         else:
             error = float("inf")  # a failed run is the worst possible fit
         record(values, error, identifier)

@@ -23,111 +23,56 @@ from typing import Any, Callable, Iterator
 from orchestrator import rundir
 from orchestrator.campaign import store
 from orchestrator.campaign.spec import base_kind, expand, load_campaign
-from orchestrator.case import Case, CaseError
-from orchestrator.engines import RunOptions, get_adapter
+from orchestrator.case import CaseError
+from orchestrator.engines import RunOptions, build_stamp
 from orchestrator.engines.base import EngineError, die_with_parent
-from orchestrator.plan import RunPlan, make_plan
-from orchestrator.rundir import RUN_RECORD
-from orchestrator.runner import RESULTS, resumable, run_locked
-from orchestrator.studies.base import RELEASE_DIR
-from orchestrator.studies.registry import study_kind
+from orchestrator.studies.launch import Point
+from orchestrator.studies.registry import launch_kind
 
 RERUN = ("pending", "incomplete", "stale")  # what a launch runs; failed ones only when asked
 
 
 def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case",
             rerun_failed: bool = False, options: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Run one case or study point in `directory` (any process); never raises for an engine or case failure.
+    """Run one point of any launch kind (studies.registry) in `directory` (any process); never raises
+    for an engine or case failure.
 
     Returns {"run_id", "status": completed | failed | skipped, ...}; skipped: another process holds
-    the point or already completed it (or it failed before and rerun_failed is off). options: the
-    launch's RunOptions as a dict (how engines run: MPI processes), passed to every engine.
+    the point or already completed it (or it failed before and rerun_failed is off), or its inputs no
+    longer give the run id its directory stands for. options: the launch's RunOptions as a dict (how
+    engines run: MPI processes), passed to every engine.
     """
     run_options = RunOptions(**(options or {}))
     path = Path(directory)
     started = time.perf_counter()
+    launch = launch_kind(kind)
     try:
         with rundir.locked(path, wait=False):
-            state = rundir.status(path, store.inputs_model(kind), held=True, expected_id=path.name)
+            state = store.status(path, held=True, model=launch.model)
             if state not in RERUN and not (state == "failed" and rerun_failed):
                 return {"run_id": path.name, "status": "skipped", "reason": state}
-            plan = _case_plan(point_json, Path(case_dir)) if kind == "case" else None
-            if rundir.holds_attempt(path) and not _continues(path, Path(case_dir), kind, plan):
+            point = launch.point(point_json, Path(case_dir))
+            if rundir.holds_attempt(path) and not point.continues(path):
                 rundir.retire(path, path.parent.parent)
-            return _perform_locked(point_json, path, Path(case_dir), timeout, kind, started, run_options, plan)
+            return _perform_locked(point, kind, path, Path(case_dir), timeout, started, run_options)
     except rundir.Busy:
         return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
 
 
-def _case_plan(point_json: str, case_dir: Path) -> RunPlan | None:
-    """The plan of a case point, made once for the whole point (None: the case does not pass its
-    checks; running it records that)."""
+def _perform_locked(point: Point, kind: str, path: Path, case_dir: Path, timeout: float | None, started: float,
+                    options: RunOptions) -> dict[str, Any]:
+    today = rundir.run_id(point.inputs, build_stamp(point.inputs.engine.value), case_dir=case_dir)  # type: ignore[attr-defined]
+    if today != path.name:  # a file it names, or the build, changed since the launch planned it: this directory is not its
+        return {"run_id": path.name, "status": "skipped",
+                "reason": f"its inputs changed since the launch planned it (now run {today}): relaunch to run them"}
     try:
-        return make_plan(Case.model_validate_json(point_json), case_dir)
-    except (CaseError, ValueError):
-        return None
-
-
-def _continues(path: Path, case_dir: Path, kind: str, plan: RunPlan | None) -> bool:
-    """A point cut off mid-run that goes on from its checkpoint (a study point: its release's; a
-    case that no longer passes its checks never does)."""
-    if kind != "case":
-        return resumable(path / RELEASE_DIR, path)
-    return plan is not None and resumable(path, case_dir, plan)
-
-
-def _perform_locked(point_json: str, path: Path, case_dir: Path, timeout: float | None, kind: str, started: float,
-                    options: RunOptions, plan: RunPlan | None = None) -> dict[str, Any]:
-    try:
-        if kind == "case":
-            case = Case.model_validate_json(point_json)
-            today = rundir.run_id(case, case_dir=case_dir)
-            if today != path.name:  # a file it names changed since the launch planned it: this directory is not its
-                return {"run_id": path.name, "status": "skipped",
-                        "reason": f"its inputs changed since the launch planned it (now run {today}): relaunch to run them"}
-            record = run_locked(case, case_dir, path, None, timeout, get_adapter(case.engine.value, options), plan)
-        else:
-            record = perform_study(kind, point_json, path, started, timeout, options)
+        record = point.run(path, path.parent.parent, timeout, options)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
         summary = error.summary if isinstance(error, EngineError) else str(error)
-        if isinstance(error, CaseError) or kind != "case":
-            tail = error.tail if isinstance(error, EngineError) else []
-            rundir.write_record(path, {"status": "failed", "kind": kind, "error": summary, "log_tail": tail})
+        if (rundir.read_record(path) or {}).get("status") != "failed":  # the runner records a case's engine failure itself
+            rundir.record_failure(path, kind, summary, error.tail if isinstance(error, EngineError) else [])
         return {"run_id": path.name, "status": "failed", "error": summary, "wall_time_s": time.perf_counter() - started}
-
-
-def perform_study(kind_name: str, study_json: str, path: Path, started: float, timeout: float | None,
-                  options: RunOptions | None = None) -> dict[str, Any]:
-    """A study as one campaign run, with a summary run.json (and the study as its case.json).
-
-    The study's preparation (an avalanche's packing, a collapse's rained column) is shared by every
-    run of the campaign in <campaign>/<kind.shared_dir>. The summary points at the release's results
-    (run/results.h5) and holds the study's scalar metrics, so the index and the plots treat it like
-    any run.
-    """
-    kind = study_kind(kind_name)
-    study = kind.model.model_validate_json(study_json)
-    build = rundir.build_stamp(study.engine.value)
-    rundir.save_inputs(path, study)
-    report = kind.run(study, path, shared=path.parent.parent / kind.shared_dir, timeout=timeout, options=options)
-    release = rundir.read_json(path / RELEASE_DIR / RUN_RECORD) or {}
-    shared = report[kind.preparation]
-    record = {
-        "status": "completed",
-        "kind": kind_name,
-        "run_id": rundir.run_id(study, build),
-        "build": build,
-        "results": f"run/{RESULTS}",
-        "engine": release.get("engine"),
-        "engine_version": release.get("engine_version"),
-        "wall_time_s": time.perf_counter() - started,
-        "preparation": shared.get("directory"),
-        "preparation_reused": shared.get("reused"),
-        "metrics": kind.metrics(report),
-    }
-    rundir.write_record(path, record)
-    return record
 
 
 @dataclass
@@ -177,7 +122,7 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
     for parameters, case in expand(spec, base):
         engine = case.engine.value
         if engine not in builds:  # once per engine: it hashes the templates and the plugin sources
-            builds[engine] = rundir.build_stamp(engine)
+            builds[engine] = build_stamp(engine)
         identifier = rundir.run_id(case, builds[engine], case_dir=base_dir)
         points[identifier] = parameters
         cases[identifier] = case

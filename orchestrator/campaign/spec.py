@@ -22,9 +22,9 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.stats import qmc
 
-from orchestrator.case import CaseError, Name, Strict, parse_case, parse_model, read_yaml
+from orchestrator.case import CaseError, Name, Strict, parse_model, read_yaml
 from orchestrator.engines import Engine
-from orchestrator.studies.registry import detect, study_kind
+from orchestrator.studies.registry import LAUNCH_KINDS, detect, launch_kind
 
 ParameterPath = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+))*$")]
 
@@ -71,7 +71,7 @@ class CampaignSpec(Strict):
     # packings) or a collapse study (its runs share preparations). `auto`: a collapse study when the
     # file has `column`, `channel` or `grains`; an avalanche study when it has `packing`, `release`,
     # `geometry` or `brick`; either only without `bodies`.
-    kind: Literal["auto", "case", "avalanche", "collapse"] = "auto"
+    kind: Literal[("auto", *LAUNCH_KINDS)] = "auto"  # type: ignore[valid-type]
     engine: Engine | None = None
     designs: list[Design] = []
     replicates: Annotated[int, Field(ge=1, le=10_000)] = 1
@@ -86,9 +86,7 @@ def base_kind(spec: CampaignSpec, base: dict[str, Any]) -> str:
 
 def validate_point(kind: str, data: dict[str, Any], source: str) -> Any:
     """A validated case, or study of that kind, from a mapping."""
-    if kind == "case":
-        return parse_case(data, source=source)
-    return study_kind(kind).parse(data, source)
+    return launch_kind(kind).parse(data, source)
 
 
 def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
@@ -211,7 +209,7 @@ def _dotted(node: ast.AST) -> str:
 def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
     """(varied parameters, validated case or study) for every point × replicate, in a stable order."""
     kind = base_kind(spec, base)
-    if kind != "case":  # a study: every field present (defaults filled in), so any study path can vary
+    if launch_kind(kind).fill_defaults:  # a study: every field present (defaults filled in), so any study path can vary
         base = validate_point(kind, base, spec.base).model_dump(mode="json")
     size = math.prod([_design_size(design) for design in spec.designs]) * spec.replicates
     if size > MAX_POINTS:

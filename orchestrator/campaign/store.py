@@ -20,9 +20,10 @@ import pandas as pd
 from pydantic import BaseModel
 
 from orchestrator import rundir
-from orchestrator.case import Case, CaseError
-from orchestrator.rundir import RUN_RECORD, retire
-from orchestrator.studies.registry import study_kind
+from orchestrator.case import CaseError
+from orchestrator.engines import build_stamp
+from orchestrator.rundir import retire
+from orchestrator.studies.registry import launch_kind
 
 RUNS = "runs"
 POINTS = "points.json"
@@ -31,33 +32,24 @@ INDEX = "index.parquet"
 CAMPAIGN = "campaign.json"  # which campaign the directory holds: its name, base file and designs
 CAMPAIGN_LOCK = ".campaign.lock"
 
-__all__ = ["RUNS", "POINTS", "INDEX", "CAMPAIGN", "run_id", "run_dir", "status", "retire", "claim", "write_points", "build_index",
+__all__ = ["RUNS", "POINTS", "INDEX", "CAMPAIGN", "run_dir", "status", "retire", "claim", "write_points", "build_index",
            "campaign_lock"]
-
-
-def run_id(point: BaseModel, case_dir: Path | None = None) -> str:
-    """The run id of a case or study point (rundir.run_id; files it names are relative to case_dir)."""
-    return rundir.run_id(point, case_dir=case_dir)
 
 
 def run_dir(campaign_dir: Path, identifier: str) -> Path:
     return campaign_dir / RUNS / identifier
 
 
-def inputs_model(kind: str) -> type[BaseModel]:
-    return Case if kind == "case" else study_kind(kind).model
-
-
-def status(directory: Path) -> str:
-    """rundir.status of a campaign run, its inputs read as the kind its record names; the run must be
-    the one its directory is named for (a point directory stands for its run id)."""
-    record = rundir.read_json(directory / RUN_RECORD) or {}
-    kind = record.get("kind", "case")
-    try:
-        model = inputs_model(str(kind))
-    except ValueError:
-        return "incomplete"
-    return rundir.status(directory, model, expected_id=directory.name)
+def status(directory: Path, held: bool = False, model: type[BaseModel] | None = None) -> str:
+    """rundir.status of a campaign run against today's build, its inputs read as `model` (default: the
+    kind its record names); the run must be the one its directory is named for (a point directory
+    stands for its run id). held: the caller holds the directory's lock."""
+    if model is None:
+        try:
+            model = launch_kind(str((rundir.read_record(directory) or {}).get("kind", "case"))).model
+        except ValueError:
+            return "incomplete"
+    return rundir.status(directory, model, builds=build_stamp, held=held, expected_id=directory.name)
 
 
 @contextmanager
@@ -136,7 +128,7 @@ def build_index(campaign_dir: Path) -> pd.DataFrame:
         superseded = latest is not None and identifier not in latest
         row: dict[str, Any] = {"run_id": identifier, "status": "stale" if superseded else status(directory), "superseded": superseded}
         row.update({f"param.{k}": v for k, v in parameters.items()})
-        record = rundir.read_json(directory / RUN_RECORD)
+        record = rundir.read_record(directory)
         if record is not None:
             row.update(
                 wall_time_s=record.get("wall_time_s"),

@@ -14,8 +14,8 @@ from rich.progress import Progress
 from rich.table import Table
 
 from orchestrator.engines import RunOptions
-from orchestrator.results import RELEASE_DIR, RESULTS, RUN_RECORD, read_json
-from orchestrator.rundir import Busy
+from orchestrator.results import RELEASE_DIR, RESULTS
+from orchestrator.rundir import Busy, read_record
 from orchestrator.validation import bounded
 
 def run_options() -> RunOptions:
@@ -93,7 +93,7 @@ def results_path(directory: Path) -> Path:
     for candidate in (directory, directory / RELEASE_DIR):
         if (candidate / RESULTS).exists():
             return candidate / RESULTS
-    record = read_json(directory / RUN_RECORD) or {}
+    record = read_record(directory) or {}
     fail(f"{directory} has no {RESULTS} (run status: {bounded(str(record.get('status', 'unknown')), 40)})")
 
 

@@ -19,7 +19,7 @@ from rich.table import Table
 
 from orchestrator.case import CaseError, load_case
 from orchestrator.validation import with_engine
-from orchestrator.cli.avalanche import avalanche, demo, study_table, write_study_report
+from orchestrator.cli.avalanche import avalanche, demo, study_table
 from orchestrator.cli.campaign import campaign
 from orchestrator.cli.collapse import collapse
 from orchestrator.cli.parity import parity
@@ -38,7 +38,8 @@ from orchestrator.post import summary as metrics
 from orchestrator.post.lost import NoBodyLeft
 from orchestrator.results import REPORT, read_results
 from orchestrator.validation import bounded
-from orchestrator.runner import RESULTS, render_case, resume_point, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
 from orchestrator import rundir as rundir_module
 from orchestrator.capabilities import capabilities
@@ -166,7 +167,9 @@ def post(rundir: Path, as_json: bool) -> None:
 def _post(rundir: Path, as_json: bool) -> None:
     if (rundir / REPORT).exists():
         report = json.loads((rundir / REPORT).read_text())
-        page = write_study_report(rundir, report, report["study"]["geometry"]["slope_deg"])
+        from orchestrator.studies.avalanche.report import write_report
+
+        page = write_report(rundir, report)
         if as_json:
             console.print_json(json.dumps({"deposit": report["deposit"], "packing": report.get("packing")}))
         else:

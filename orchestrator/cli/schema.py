@@ -25,10 +25,9 @@ def models() -> dict[str, type[BaseModel]]:
     """Schema name → the model that validates such a file."""
     from orchestrator.campaign.calibrate import CalibrationSpec
     from orchestrator.campaign.spec import CampaignSpec
-    from orchestrator.case import Case
-    from orchestrator.studies.registry import STUDY_KINDS
+    from orchestrator.studies.registry import LAUNCH_KINDS
 
-    return {"case": Case, **{name: kind.model for name, kind in STUDY_KINDS.items()}, "campaign": CampaignSpec,
+    return {**{name: kind.model for name, kind in LAUNCH_KINDS.items()}, "campaign": CampaignSpec,
             "calibration": CalibrationSpec}
 
 

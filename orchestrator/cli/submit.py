@@ -14,10 +14,10 @@ from orchestrator import rundir
 from orchestrator.capabilities import capabilities
 from orchestrator.case import CaseError, load_case
 from orchestrator.cli.common import console, errors, fail, run_options, warn, writable_rundir
-from orchestrator.engines import ENGINE_NAMES
+from orchestrator.engines import ENGINE_NAMES, build_stamp
 from orchestrator.engines.options import MAX_PROCESSES
 from orchestrator.plan import make_plan
-from orchestrator.results import RESULTS, RUN_RECORD
+from orchestrator.results import RESULTS
 from orchestrator.slurm import record
 from orchestrator.slurm.commands import SlurmError, is_live, job_state, sbatch
 from orchestrator.slurm.job import run_command, run_job
@@ -56,7 +56,7 @@ def submit(case_path: Path, ntasks: int, walltime: str, nodes: int | None, parti
         plan = make_plan(case, case_path.parent)  # the pre-flight checks: a bad case is one line, before anything is submitted
         if ntasks > 1 and not capabilities(case.engine).mpi:
             raise CaseError(f"--ntasks={ntasks}: {case.engine.value} runs a case on one process; allowed: 1")
-        directory = _absolute(output or Path("runs") / f"{case.name}-{case.engine.value}-{rundir.run_id(case, case_dir=case_path.parent)}")
+        directory = _absolute(output or Path("runs") / f"{case.name}-{case.engine.value}-{rundir.run_id(case, build_stamp(case.engine.value), case_dir=case_path.parent)}")
         request = JobRequest(_absolute(case_path), case.engine.value, directory, case.name, ntasks, walltime, nodes, partition, account,
                              max_restarts, run_options().checkpoint_interval)
         text = request.text()
@@ -99,9 +99,9 @@ def _refuse_a_second_chain(directory: Path) -> None:
 @click.argument("directory", metavar="RUN_DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def status(directory: Path) -> None:
     """The state of a run directory: its status and segments, and the SLURM jobs that ran it."""
-    run = rundir.read_json(directory / RUN_RECORD) or {}
+    run = rundir.read_record(directory) or {}
     segments = run.get("segments") if isinstance(run.get("segments"), list) else []
-    line = f"{directory}: {rundir.status(directory)}"
+    line = f"{directory}: {rundir.status(directory, builds=build_stamp)}"
     if len(segments) > 1:
         line += f", {len(segments)} segments (simulated time computed twice: {float(run.get('simulated_time_lost_s', 0.0)):.4g} s)"
     console.print(line, highlight=False, soft_wrap=True)

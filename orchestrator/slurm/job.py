@@ -23,6 +23,7 @@ from pathlib import Path
 from types import FrameType
 
 from orchestrator import rundir
+from orchestrator.engines import build_stamp
 from orchestrator.engines.base import die_with_parent
 from orchestrator.engines.options import RunOptions
 from orchestrator.plan import RunPlan
@@ -100,7 +101,7 @@ def run_job(command: list[str], plan: RunPlan, directory: Path, max_restarts: in
     job_id = job_id or os.environ.get("SLURM_JOB_ID") or OUTSIDE_SLURM
     known = any(job.get("job_id") == job_id for job in record.read(directory)["jobs"])
     entry = record.update(directory, job_id, started=rundir.now(), **({} if known else {"restart": 0}))
-    if rundir.status(directory) == "completed":
+    if rundir.status(directory, builds=build_stamp) == "completed":
         return _finish(directory, job_id, Outcome("completed", f"{directory}: the run is complete already; nothing to do", 0))
     started_from = _checkpoint_step(plan, directory)
     returncode = _run(command, stop) if stop.reason is None else 0
@@ -110,7 +111,7 @@ def run_job(command: list[str], plan: RunPlan, directory: Path, max_restarts: in
 
 def _conclude(plan: RunPlan, directory: Path, job_id: str, restart: int, max_restarts: int, reason: str | None, returncode: int,
               started_from: int) -> Outcome:
-    if rundir.status(directory) == "completed":
+    if rundir.status(directory, builds=build_stamp) == "completed":
         return Outcome("completed", f"{directory}: the run is complete (results.h5)", 0)
     if reason == "stopped":
         return Outcome("stopped", f"{directory}: the run was stopped (cancelled, or the time limit came without the early signal); "

@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import shutil
+import time
 from pathlib import Path
 from typing import Any, Callable, ClassVar
 
@@ -30,9 +31,10 @@ from pydantic import BaseModel
 
 from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
-from orchestrator.engines import RunOptions
+from orchestrator.engines import RunOptions, build_stamp
 from orchestrator.results import RELEASE_DIR, REPORT, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
-from orchestrator.runner import RESULTS, ensure_run, run_case
+from orchestrator.results import RESULTS
+from orchestrator.runner import ensure_run, resumable, run_case
 
 
 
@@ -87,12 +89,56 @@ class StudyKind:
     def load(self, path: Path) -> Any:
         return self.parse(read_yaml(path, f"{self.name} study"), str(path))
 
+    # -- as a campaign's launch kind (studies.launch) ---------------------------------------------
+    fill_defaults: ClassVar[bool] = True  # a campaign varies a study with every field present
+
+    def detect(self, data: dict[str, Any]) -> bool:
+        return bool(self.detect_keys & set(data))
+
+    def point(self, point_json: str, case_dir: Path) -> "StudyPoint":
+        return StudyPoint(self, self.model.model_validate_json(point_json))
+
     def run(self, study: Any, outdir: Path, progress: StageProgress | None = None, shared: Path | None = None,
             timeout: float | None = None, options: RunOptions | None = None) -> dict[str, Any]:
         """Prepare (or reuse the preparation in `shared`), release, measure; returns the report.
         options: how the engines run (the kind's processor_grid is the default split)."""
         options = dataclasses.replace(options or RunOptions(), default_grid=self.processor_grid)
         return run_study(self, study, outdir, progress, shared, timeout, options)
+
+
+class StudyPoint:
+    """A study as one campaign point: its products in the point's directory, its preparation shared
+    by the campaign's points (<campaign>/<kind.shared_dir>), and a summary run.json that points at the
+    release's results and holds the study's scalar metrics (so the index and plots treat it as any run)."""
+
+    def __init__(self, kind: StudyKind, study: BaseModel) -> None:
+        self.kind, self.inputs = kind, study
+
+    def continues(self, directory: Path) -> bool:
+        return resumable(directory / RELEASE_DIR, directory)
+
+    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions) -> dict[str, Any]:
+        started = time.perf_counter()
+        study, kind = self.inputs, self.kind
+        rundir.save_inputs(directory, study)
+        report = kind.run(study, directory, shared=campaign_dir / kind.shared_dir, timeout=timeout, options=options)
+        release = rundir.read_record(directory / RELEASE_DIR) or {}
+        shared = report[kind.preparation]
+        record = {
+            "status": "completed",
+            "kind": kind.name,
+            "run_id": report["study_id"],  # rundir.run_id of the study with today's build, as the study computed it
+            "build": report["build"],
+            "results": f"{RELEASE_DIR}/{RESULTS}",
+            "engine": release.get("engine"),
+            "engine_version": release.get("engine_version"),
+            "wall_time_s": time.perf_counter() - started,
+            "preparation": shared.get("directory"),
+            "preparation_reused": shared.get("reused"),
+            "metrics": kind.metrics(report),
+        }
+        rundir.write_record(directory, record)
+        return record
 
 
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
@@ -136,7 +182,8 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
                timeout: float | None, options: RunOptions) -> dict[str, Any]:
     release_dir = outdir / RELEASE_DIR
     record = outdir / f"{kind.preparation}.json"
-    study_id = rundir.run_id(study)
+    build = build_stamp(study.engine.value)
+    study_id = rundir.run_id(study, build)
     set_aside = _set_aside_other_study(kind, outdir, study_id)
     try:
         rundir.write_json_atomic(outdir / STUDY_RECORD, {"study_id": study_id, "kind": kind.name})
@@ -158,6 +205,7 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
     report[kind.preparation] = {**report.get(kind.preparation, {}), **shared_record}
     report["study"] = study.model_dump(mode="json")
     report["study_id"] = study_id
+    report["build"] = build
     report["finished_before"] = finished_before  # a rerun's reader: nothing ran now
     if set_aside:
         report["set_aside"] = set_aside

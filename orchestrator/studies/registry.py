@@ -1,28 +1,32 @@
-"""The study kinds a campaign can vary, by name: one dict, one error listing them."""
+"""The kinds a campaign can launch, by name: one dict, one error listing them (studies.launch).
+
+A plain case is one kind among the studies: campaigns launch every kind the same way.
+"""
 
 from __future__ import annotations
 
 from orchestrator.case import CaseError
 from orchestrator.studies.avalanche.study import KIND as AVALANCHE
-from orchestrator.studies.base import StudyKind
 from orchestrator.studies.collapse.study import KIND as COLLAPSE
+from orchestrator.studies.launch import CASE, LaunchKind
 
-# Order matters for detection: a collapse study file also has `release`, so its keys are tried first.
-STUDY_KINDS: dict[str, StudyKind] = {kind.name: kind for kind in (COLLAPSE, AVALANCHE)}
+# Order matters for detection: a case file (`bodies`) is a case whatever else it has; a collapse
+# study file also has `release`, so its keys are tried before the avalanche's.
+LAUNCH_KINDS: dict[str, LaunchKind] = {kind.name: kind for kind in (CASE, COLLAPSE, AVALANCHE)}
 
 
-def study_kind(name: str) -> StudyKind:
+def launch_kind(name: str) -> LaunchKind:
+    """The kind named `name`; CaseError listing the kinds there are."""
     try:
-        return STUDY_KINDS[name]
+        return LAUNCH_KINDS[name]
     except KeyError:
-        raise CaseError(f"kind: unknown study kind {name!r}; allowed: case, {', '.join(STUDY_KINDS)}") from None
+        raise CaseError(f"kind: unknown kind {name!r}; allowed: {', '.join(LAUNCH_KINDS)}") from None
 
 
 def detect(data: object) -> str:
-    """`case`, or the study kind whose keys a study file has (a file with `bodies` is a case)."""
-    if not isinstance(data, dict) or "bodies" in data:
-        return "case"
-    for kind in STUDY_KINDS.values():
-        if kind.detect_keys & set(data):
-            return kind.name
-    return "case"
+    """The name of the first kind whose keys a file's mapping has; a case when none does."""
+    if isinstance(data, dict):
+        for kind in LAUNCH_KINDS.values():
+            if kind.detect(data):
+                return kind.name
+    return CASE.name

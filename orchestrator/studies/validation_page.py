@@ -104,10 +104,9 @@ def record_drops(engine: str, workdir: Path) -> dict[str, Any]:
 
 def record_demo(engine: str, workdir: Path, seeds: tuple[int, ...] = DEMO_SEEDS) -> list[dict[str, Any]]:
     """The demo avalanche once per seed on one engine: its deposit metrics and apparent density."""
-    from orchestrator.studies.avalanche.study import load_study, run_study
+    from orchestrator.studies.avalanche.study import DEMO_STUDY as demo, load_study, run_study
     from orchestrator.validation import with_engine
 
-    demo = Path(__file__).resolve().parents[2] / "cases" / "avalanche" / "small.yaml"
     runs = []
     for seed in seeds:
         study = with_engine(load_study(demo), engine).model_copy(update={"seed": seed, "name": f"demo_{seed}"})

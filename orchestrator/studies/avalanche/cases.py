@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.case import Case, RestStop, parse_case
-from orchestrator.engines import capabilities
+from orchestrator.engines import build_stamp, capabilities
 from orchestrator.results import Trajectory
 from orchestrator.rundir import run_id
 from orchestrator.studies.avalanche.geometry import ordered_pile, pile_rows, rain_height, rain_positions
@@ -121,18 +121,19 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
         }
         for k in range(packed.n_bodies)
     ]
-    walls = study.geometry.build().walls(trap_closed=False)
+    geometry = study.geometry.build()
+    walls = geometry.walls(trap_closed=False)
     extra = {"initial_state": str(state_file.resolve())} if state_file is not None else {}
     # A brick may leave the boards over an edge (the experiment's boards end; its floor is not modelled):
     # it is dropped from the results and counted in the deposit (bodies_lost), not an error.
     return _case(study, study.name, study.release.duration, study.release.output_interval, study.release.stop_at_rest,
                  _contacts(study.contacts), clumps, walls, record_contacts=study.release.record_contacts,
-                 lost_bodies="drop", **extra)
+                 lost_bodies="drop", gravity=list(geometry.release_gravity()), **extra)
 
 
 def packing_key(study: AvalancheStudy) -> str:
     """Content address of the packing of `study` (its run id)."""
-    return run_id(packing_case(study))
+    return run_id(packing_case(study), build_stamp(study.engine.value))
 
 
 def packing_state_file(study: AvalancheStudy, packing_dir: Path) -> Path | None:

@@ -75,6 +75,10 @@ class AvalancheGeometry:
         standing on its base before it is set on the slope."""
         return tuple(float(v) for v in -g * self.normal)  # type: ignore[return-value]
 
+    def release_gravity(self, g: float = 9.81) -> tuple[float, float, float]:
+        """Gravity during the release (m/s²): vertical, down, as in the experiment."""
+        return (0.0, 0.0, -g)
+
     def slab(self, volume: float) -> tuple[np.ndarray, np.ndarray]:
         """Centre of a slab of `volume` (m³) lying flat on the box's base, and the upper end of that
         base (world (3,) points, m): the experiment's initial state (Fig. 9 of the 2012 study: 40 l
@@ -157,9 +161,8 @@ def apparent_density(geometry: AvalancheGeometry, positions: np.ndarray, orienta
     counting as high), while a wider stretch of bare floor (where a pour leaning on the trap thins
     out) stays empty. A flush ordered pile thus reads the brick's mass over its box times the share of
     the floor its rows cover, as a level measured in the box would give.
-    The reading follows the surface, not the grid: on a pour of 800 bricks (measured 2026-11-30) it
-    is 958 kg/m³ with a grid of 1 mm and of 2 mm, where the highest sphere in each of 8 × 8 cells of
-    19 × 25 mm reads 828.
+    The reading follows the surface, not the grid (the same with a 1 mm and a 2 mm grid, where the
+    highest sphere of coarse cells reads low: docs/studies/avalanche.md, packing density).
     positions (N, 3) m; orientations (N, 4) unit quaternions (w, x, y, z).
     """
     spacing = spacing or brick.extent[2] / 4.0

@@ -1,5 +1,8 @@
 """Pictures and pages of an avalanche run: what a person looks at before reading numbers.
 
+`write_report` makes a study directory's report/ (figures, snapshots, VTK, index.html with the table
+of studies.avalanche.table) from its release's results and its report.json.
+
 All figures are matplotlib PNGs (orchestrator.figures: no pyplot, no display needed); `index.html` shows them with the
 metrics table; `bodies_NNNN.vtu` (meshio) opens in ParaView.
 """
@@ -19,122 +22,29 @@ from orchestrator.shapes.clump import quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains
-from orchestrator.post.front import flat_phases
-from orchestrator.results import Trajectory
-from orchestrator.studies.avalanche.geometry import AvalancheGeometry
+from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results, safe_output_path
+from orchestrator.studies.avalanche.study import KIND
+from orchestrator.studies.avalanche.table import FLAT_PHASES, Row, phases_of, study_rows
 
-# The 2012 study's front phases on the flat (reference.toml, random_pour_findings), for the plot.
-FLAT_PHASES = ((0.0, 0.2, "strong deceleration at impact"), (0.2, 0.6, "slow decrease"), (0.6, 0.8, "strong deceleration to stop"))
-
-
-def phases_of(report: dict[str, Any]) -> dict[str, Any] | None:
-    """The front's phases on the flat: stored in the report, or fitted now (reports written before they were)."""
-    front = report["front"]
-    if "flat_phases" in front:
-        return front["flat_phases"]
-    return flat_phases(np.asarray(front["position"], dtype=float), np.asarray(front["velocity"], dtype=float))
-
-
-# Fig. 9 of the 2012 study, read off the figure (science brief): the experiment's mass at the opening,
-# a slab of 40 l on the base of the 0.6 × 0.4 × 0.2 m box, for the full-scale set-up only.
-FIG9_CENTRE = (-1.15, 1.27)  # m, (x, z) of the initial centre of mass
-FIG9_REAR = (-1.41, 1.41)  # m, (x, z) of the upper end of the box's base, where φ_app starts
-
-
-def _span(ranges: dict[str, Any], key: str) -> str:
-    low, high = ranges[key]
-    return f"{low:.3g}–{high:.3g} (study's code, {ranges.get('runs', '')} runs from the demo's earlier heap packing)"
-
-
-def initial_rows(report: dict[str, Any], full_scale: bool) -> list[tuple[str, float, str, str]]:
-    """The mass at the opening (report["initial"]) beside a slab filling the box's base and, at full
-    scale, Fig. 9's reading; empty for reports written before it was measured."""
-    initial = report.get("initial")
-    if not initial:
-        return []
-
-    def beside(slab: float, fig9: float) -> str:
-        return f"slab: {slab:.3f}" + (f"; Fig. 9: ≈ {fig9:g}" if full_scale else "")
-
-    outside = initial["bodies_outside_box"]
-    return [
-        ("opening: centre of mass x (m)", initial["x_cm"], beside(initial["slab_x_cm"], FIG9_CENTRE[0]), ""),
-        ("opening: centre of mass z (m)", initial["z_cm"], beside(initial["slab_z_cm"], FIG9_CENTRE[1]), ""),
-        ("opening: rear of the base x (m)", initial["rear_x"], beside(initial["slab_rear_x"], FIG9_REAR[0]), ""),
-        ("opening: rear of the base z (m)", initial["rear_z"], beside(initial["slab_rear_z"], FIG9_REAR[1]), ""),
-        ("opening: bulk volume (l)", 1e3 * initial["bulk_volume"], "", ""),
-        ("opening: bricks outside the box", outside, "0", "pass" if outside == 0 else "bricks stand above or outside the box"),
-    ]
-
-
-def comparison_rows(report: dict[str, Any], reference: dict[str, Any], demo: dict[str, Any] | None = None) -> list[tuple[str, float, str, str]]:
-    """(metric, value, reference, verdict) rows. `demo`: the study's code's ranges for the demo
-    ([low, high] per deposit metric), shown when the report is the demo's (same geometry and
-    volume); Fig. 9's initial state when the geometry is the experiment's."""
-    deposit = report["deposit"]
-    findings = reference.get("avalanche", {}).get("manzella2009", {}).get("random_pour_findings", {})
-    span = (lambda key: _span(demo, key)) if demo else (lambda key: "")
-    height_note = f"DEM ≈ {1 + findings.get('height_overestimate_by_dem', 0.6):.1f} × experiment"
-    rows = [
-        ("L (m)", deposit["length"], span("length"), ""),
-        ("R (m)", deposit["runout"], span("runout"), ""),
-        ("W (m)", deposit["width"], span("width"), ""),
-        ("H (m)", deposit["height"], span("height") or height_note, ""),
-        ("X_CM (m)", deposit["x_cm"], span("x_cm"), ""),
-        ("φ_CM (°)", deposit["travel_angle_cm_deg"], span("travel_angle_cm_deg"), ""),
-        ("φ_app (°)", deposit["fahrboschung_deg"], span("fahrboschung_deg"), ""),
-        ("outlier bricks", deposit["outliers"], "", ""),
-        ("bricks left on the slope", deposit.get("bodies_on_slope", float("nan")), "", ""),
-        ("bricks off the boards (lost)", deposit.get("bodies_lost", float("nan")), "", ""),
-        ("front max speed (m/s)", report["front"]["max_velocity"], "", ""),
-        ("front final position (m)", report["front"]["final_position"], "", ""),
-    ]
-    phases = phases_of(report)
-    if phases is not None:
-        bands = findings.get("front_phases_on_flat_m", [[0.0, 0.2], [0.2, 0.6], [0.6, 0.8]])
-        rows += [
-            ("front on flat: 1st switch x_1 (m)", phases["x_1"], f"≈ {bands[0][1]:g} (experiment, full scale)", ""),
-            ("front on flat: 2nd switch x_2 (m)", phases["x_2"], f"≈ {bands[1][1]:g} (experiment, full scale)", ""),
-            ("front on flat: stop (m)", phases["x_stop"], f"≈ {bands[2][1]:g} (experiment, full scale)", ""),
-            ("front on flat: middle/first deceleration", phases["slope_2"] / phases["slope_1"] if phases["slope_1"] else float("nan"),
-             "strong / slow / strong", "pass" if phases["strong_slow_strong"] else "not strong / slow / strong"),
-        ]
-    geometry = report.get("study", {}).get("geometry", {})
-    full_scale = bool(geometry) and all(geometry.get(key) == getattr(AvalancheGeometry, key) for key in
-                                        ("slope_deg", "launch_height", "box_depth", "box_width", "box_height"))
-    rows += initial_rows(report, full_scale)
-    packing = report.get("packing")
-    if packing:
-        target, value = packing["target_apparent_density"], packing["apparent_density"]
-        floor = geometry.get("box_depth", EXPERIMENT_BOX[0]) * geometry.get("box_width", EXPERIMENT_BOX[1])
-        tolerance = report.get("study", {}).get("packing", {}).get("density_search", {}).get("tolerance", DENSITY_TOLERANCE)
-        rows.append(("apparent density (kg/m³)", value, f"{target:g} ± {tolerance:.0%} (the experiment's)",
-                     packing_verdict(value, target, floor, tolerance)))
-        if packing.get("trials"):
-            rows.append(("μ brick/brick while packing", packing["brick_brick_mu"],
-                         f"{len(packing['trials'])} trial(s): " + ", ".join(f"{t['mu']:.3g} → {t['apparent_density']:.0f}" for t in packing["trials"]), ""))
-    return rows
-
-
-# The experiment's release box floor (m; Manzella & Labiouse 2009, the set-up's defaults): the
-# densities of its packings (1000 kg/m³ poured, 1600 piled) were reached in it.
-EXPERIMENT_BOX = (AvalancheGeometry.box_depth, AvalancheGeometry.box_width)
-DENSITY_TOLERANCE = 0.02  # relative: the density search's default (study.DensitySearchSpec)
-
-
-def packing_verdict(value: float, target: float, floor: float, tolerance: float = DENSITY_TOLERANCE) -> str:
-    """The check of a packing's apparent density (kg/m³) against its target, for a box floor of
-    `floor` m². A box with a fraction of the experiment's floor packs looser than the experiment's
-    (measured 2026-11-30 with Table 1 throughout: 933–958 kg/m³ in a quarter or an eighth of its floor,
-    710–819 in the demo's sixteenth; docs/studies/avalanche.md), so a miss in a box of less than half the
-    experiment's floor is said to be the box's."""
-    off = value / target - 1.0
-    if abs(off) <= tolerance:
-        return "pass"
-    share = EXPERIMENT_BOX[0] * EXPERIMENT_BOX[1] / floor
-    if share >= 2.0:
-        return f"off by {off:+.0%}: expected, a box 1/{share:.0f} of the experiment's floor packs looser (walls)"
-    return f"off by {off:+.0%}"
+def write_report(outdir: Path, report: dict[str, Any]) -> Path:
+    """Plots, snapshots, VTK and index.html for the study directory `outdir` (its report.json as
+    `report`), drawn with the brick kind the run used; returns the page. CaseError when a link would
+    take a figure out of the directory or the reference numbers cannot be read."""
+    trajectory = read_results(outdir / RELEASE_DIR / RESULTS)
+    figures = safe_output_path(outdir, "report")  # a link named report would take the figures out of the study directory
+    figures.mkdir(exist_ok=True)
+    for entry in list(figures.iterdir()):  # the writers below open their files by name: no link there may lead them out
+        safe_output_path(figures, entry.name)
+    study = KIND.parse(report["study"], str(outdir / "report.json"))
+    slope_deg = study.geometry.slope_deg
+    plot_deposit(trajectory, study.brick_spec.build(), figures / "deposit.png", slope_deg)
+    plot_front(report, figures / "front.png")
+    snapshots = plot_snapshots(trajectory, figures, slope_deg=slope_deg)
+    export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
+    chains = [figures / "force_chains.png"] if trajectory.contacts is not None else []
+    if chains:
+        plot_force_chains(trajectory, chains[0])
+    return write_html(figures, outdir.name, study_rows(report), [figures / "deposit.png", *chains, figures / "front.png", *snapshots])
 
 
 FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
@@ -285,7 +195,7 @@ def export_vtk(trajectory: Trajectory, outdir: Path, every: int = 1) -> list[Pat
     return paths
 
 
-def write_html(outdir: Path, title: str, rows: list[tuple[str, float, str, str]], images: list[Path]) -> Path:
+def write_html(outdir: Path, title: str, rows: list[Row], images: list[Path]) -> Path:
     table = "\n".join(
         f"<tr><td>{html.escape(name)}</td><td>{value:.4g}</td><td>{html.escape(ref)}</td><td>{html.escape(verdict)}</td></tr>"
         for name, value, ref, verdict in rows

@@ -26,8 +26,8 @@ RAIN_GAP = 0.003
 # requested centre (within 1e-6 m, tests/test_initial_state.py), so the pile can be tight: 19 × 26
 # bricks lie flat in the 0.6 × 0.4 m box, and the pile reads about 1607 kg/m³ × 31 / 31.2 × 15 / 15.2 =
 # 1576 kg/m³ (apparent_density; 1607: the brick's mass over its 31 × 15 × 8 mm box times the share of
-# the floor under the rows). Measured at full scale (ordered_pile_full.yaml): 1568 as laid, 1601 once
-# the layers had settled onto each other; the experiment's: 1600.
+# the floor under the rows); the experiment's: 1600. At full scale the pile settles onto that
+# (docs/studies/avalanche.md, packing density).
 PILE_GAP = 0.0002
 
 

@@ -15,8 +15,8 @@ import numpy as np
 
 from orchestrator.case import Case
 from orchestrator.engines import RunOptions
-from orchestrator.results import RUN_RECORD, Trajectory, read_json
-from orchestrator.rundir import saved_case
+from orchestrator.results import Trajectory
+from orchestrator.rundir import read_record
 from orchestrator.runner import ensure_run
 from orchestrator.studies.avalanche.cases import first_packing_mu, packing_case, packing_key, packing_state_file, release_case
 from orchestrator.studies.avalanche.density import Trial, closest, next_mu
@@ -28,7 +28,7 @@ from orchestrator.studies.reference import PACKAGED_REFERENCE, SHARED_REFERENCE,
 
 __all__ = ["AvalancheStudy", "BrickSpec", "ContactSpec", "PackingSpec", "PILE_GAP", "RAIN_GAP", "KIND", "load_study", "run_study",
            "packing_case", "packing_key", "release_case", "measure", "load_reference", "reference_path", "SHARED_REFERENCE",
-           "PACKAGED_REFERENCE"]
+           "PACKAGED_REFERENCE", "DEMO_STUDY"]
 
 
 class AvalancheKind(StudyKind):
@@ -41,8 +41,7 @@ class AvalancheKind(StudyKind):
     shared_dir = "packings"
     lost_bodies = LOST_WHILE_PACKING
     # Under MPI, split the box across the flow (y): the set-up is symmetric about y = 0, so each process
-    # gets half the bricks all along (measured: 1.74 × faster on 2 processes, against 1.13 × with the
-    # default split along the boards, which left one process with the whole pile).
+    # gets half the bricks all along (docs/benchmarks.md, strong scaling: the split, measured).
     processor_grid = "1 * 1"
 
     def preparation_case(self, study: AvalancheStudy) -> Case:
@@ -60,7 +59,7 @@ class AvalancheKind(StudyKind):
             label = "packing" if search.max_trials == 1 else f"packing, trial {len(trials) + 1} (μ brick/brick {mu:.3g})"
             directory, reused = ensure_run(packing_case(study, mu), root, "packing", lambda d: packing_state_file(study, d),
                                            progress(label) if progress else None, timeout, options)
-            record = read_json(directory / RUN_RECORD) or {}
+            record = read_record(directory) or {}
             trials.append(Trial(mu, packed_density(study, directory), str(directory), reused,
                                 float(record.get("wall_time_s", float("nan"))), None if reused else record.get("set_aside")))
             if abs(trials[-1].off(target)) <= search.tolerance or len(trials) >= search.max_trials:
@@ -83,7 +82,7 @@ class AvalancheKind(StudyKind):
 
     def measure(self, study: AvalancheStudy, trajectory: Trajectory, release_dir: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         brick, geometry = study.brick_spec.build(), study.geometry.build()
-        report = measure(trajectory, brick, gravity=-saved_case(release_dir).gravity[2], slope_deg=study.geometry.slope_deg)
+        report = measure(trajectory, brick, gravity=-geometry.release_gravity()[2], slope_deg=study.geometry.slope_deg)
         density = apparent_density(geometry, trajectory.position[0], trajectory.orientation[0], brick)
         report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density}
         report["initial"] = initial_state(geometry, trajectory, density, study.packing.volume)
@@ -99,6 +98,7 @@ class AvalancheKind(StudyKind):
 
 
 KIND = AvalancheKind()
+DEMO_STUDY = Path(__file__).resolve().parents[3] / "cases" / "avalanche" / "small.yaml"  # `demorch demo`: 96 bricks, about half a minute
 
 
 def load_study(path: Path) -> AvalancheStudy:

@@ -20,7 +20,8 @@ from orchestrator.results import Trajectory
 from orchestrator.rundir import saved_case
 from orchestrator.studies.base import StageProgress, StudyKind
 from orchestrator.studies.collapse.fields import field_metrics, measure_fields
-from orchestrator.studies.collapse.spec import CollapseStudy, preparation_case, release_case
+from orchestrator.studies.collapse.cases import preparation_case, release_case
+from orchestrator.studies.collapse.spec import CollapseStudy
 
 
 class CollapseKind(StudyKind):
