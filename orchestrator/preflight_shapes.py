@@ -121,7 +121,8 @@ def _check_wall(name: str, shapes: list[BodyShape], centres: np.ndarray, rotatio
     under = ~fixed[body]
     for u, v in ((0, 1), (1, 2), (2, 0)):
         under &= np.einsum("tk,tk->t", np.cross(tri[:, v] - tri[:, u], foot - tri[:, u]), normal) >= 0.0
-    order = np.lexsort((np.abs(height), body))[under[np.lexsort((np.abs(height), body))]]  # by body, nearest plane first
+    nearest_first = np.lexsort((np.abs(height), body))  # by body, nearest plane first
+    order = nearest_first[under[nearest_first]]
     first = order[np.unique(body[order], return_index=True)[1]]  # each body's nearest triangle under it
     groups: dict[int, list[int]] = defaultdict(list)
     for k in first:

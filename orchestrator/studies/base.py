@@ -32,8 +32,7 @@ from pydantic import BaseModel
 from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions, build_stamp
-from orchestrator.results import RELEASE_DIR, REPORT, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
-from orchestrator.results import RESULTS
+from orchestrator.results import RELEASE_DIR, REPORT, RESULTS, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
 from orchestrator.runner import ensure_run, resumable, run_case
 
 

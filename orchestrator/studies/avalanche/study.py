@@ -54,10 +54,12 @@ class AvalancheKind(StudyKind):
         time) and, when the target was not reached, a warning naming the closest."""
         search, target = study.packing.density_search, study.target_density
         trials: list[Trial] = []
+        cases: dict[float, Case] = {}  # μ → the trial's packing case, made once
         mu: float | None = first_packing_mu(study)
         while mu is not None:
             label = "packing" if search.max_trials == 1 else f"packing, trial {len(trials) + 1} (μ brick/brick {mu:.3g})"
-            directory, reused = ensure_run(packing_case(study, mu), root, "packing", lambda d: packing_state_file(study, d),
+            cases[mu] = packing_case(study, mu)
+            directory, reused = ensure_run(cases[mu], root, "packing", lambda d: packing_state_file(study, d),
                                            progress(label) if progress else None, timeout, options)
             record = read_record(directory) or {}
             trials.append(Trial(mu, packed_density(study, directory), str(directory), reused,
@@ -72,7 +74,7 @@ class AvalancheKind(StudyKind):
             summary["warning"] = (f"packing: apparent density {best.apparent_density:.0f} kg/m³ ({best.off(target):+.1%}) is the closest of "
                                  f"{len(trials)} trial(s) to the target {target:g} ± {search.tolerance:.0%} (μ brick/brick {best.mu:.3g} "
                                  f"while packing; packing.density_search sets the trials and the bounds of μ)")
-        return packing_case(study, best.mu), Path(best.directory), best.reused, summary
+        return cases[best.mu], Path(best.directory), best.reused, summary
 
     def state_file(self, study: AvalancheStudy, directory: Path) -> Path | None:
         return packing_state_file(study, directory)
