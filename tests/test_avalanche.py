@@ -150,6 +150,30 @@ def test_capped_bins_leave_a_brick_pour_unchanged_to_round_off(tmp_path: Path) -
     np.testing.assert_allclose(pours[1].position, pours[0].position, rtol=0.0, atol=1e-8)
 
 
+@pytest.mark.engine
+@requires_liggghts
+def test_the_ordered_pile_packs_under_a_lid_that_holds_a_brick_thrown_up(tmp_path: Path) -> None:
+    """The stacked pile's packing closes the box at its height (the rain's does not need to), so a
+    brick squeezed out of the partial top layer cannot leave it. Here the top brick is launched at
+    2 m/s along the box's normal, enough to rise 20 cm with nothing above it: with the lid every centre
+    ends inside the box, at most half a thickness (4 mm) from the lid at any frame."""
+    study = tiny_study("liggghts")
+    study = study.model_copy(update={"packing": study.packing.model_copy(update={"kind": "ordered_pile", "settle_time": 0.3})})
+    case = packing_case(study)
+    geometry = study.geometry.build()
+    lid = {w.name: w for w in case.walls}["lid"]
+    assert geometry.world_to_box(np.array([lid.origin]))[0, 2] == pytest.approx(study.geometry.box_height)
+    assert "lid" not in {w.name for w in packing_case(tiny_study("liggghts")).walls}  # the rain stands above the box
+    top = int(np.argmax(geometry.world_to_box(np.array([c.position for c in case.bodies.clumps]))[:, 2]))
+    thrown = case.model_copy(deep=True)
+    thrown.bodies.clumps[top] = thrown.bodies.clumps[top].model_copy(update={"velocity": tuple(2.0 * geometry.normal)})
+    run_case(thrown, tmp_path, tmp_path / "thrown")
+    packed = read_results(tmp_path / "thrown" / RESULTS)
+    height = geometry.world_to_box(packed.position.reshape(-1, 3))[:, 2]
+    assert height.max() <= study.geometry.box_height - 0.004 + 1e-4
+    assert height[-packed.n_bodies:].max() < study.geometry.box_height and not geometry.outside_box(packed.position[-1]).any()
+
+
 @pytest.mark.parametrize("engine", engine_params())
 def test_tiny_avalanche_reaches_the_flat_and_stops_and_its_packing_is_reused(engine: str, tmp_path: Path) -> None:
     study = tiny_study(engine)

@@ -93,8 +93,9 @@ class AvalancheGeometry:
         size = np.array([self.box_depth, self.box_width, self.box_height])
         return ~np.all((local >= 0.0) & (local <= size), axis=-1)
 
-    def walls(self, trap_closed: bool, wall_height: float | None = None) -> list[dict[str, object]]:
-        """Rectangles: slope board, flat board, box side and back walls, and the trap if closed."""
+    def walls(self, trap_closed: bool, wall_height: float | None = None, lid: bool = False) -> list[dict[str, object]]:
+        """Rectangles: slope board, flat board, box side and back walls (`wall_height` high, m; default
+        the box's), the trap if closed and a lid on the walls' top if `lid`."""
         height = wall_height if wall_height is not None else self.box_height
         top = self.on_slope(self.board_length, -self.board_width / 2)
         walls: list[dict[str, object]] = [
@@ -108,6 +109,8 @@ class AvalancheGeometry:
         walls.append(_rectangle("box_back", "box", corner + up, across, normal))
         if trap_closed:
             walls.append(_rectangle("trap", "box", corner, across, normal))
+        if lid:
+            walls.append(_rectangle("lid", "box", corner + normal, up, across))
         return walls
 
 
