@@ -3,8 +3,8 @@
 The packing: bricks rained (or stacked) into the closed box standing on its base (gravity along the
 slope's normal, as the experiment and the 2012 study filled it before setting it on the slope; an
 ordered pile under a lid at the walls' top), settled for `packing.settle_time`, with μ brick/brick of
-a density-search trial. Each packing is content-addressed (the hash of its case) and stored once under a packings directory, so every study
-with the same packing inputs reuses it. The release: the packed bricks, vertical gravity, the trap
+a density-search trial. Each packing is content-addressed (the hash of its case) and stored once
+under a packings directory, so every study with the same packing inputs reuses it. The release: the packed bricks, vertical gravity, the trap
 gone, the study's contacts, flowing for `release.duration`; its time starts at the opening.
 """
 
