@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds a LIGGGHTS executable with superquadric particles and the bilinear law compiled in, from
+# Builds a LIGGGHTS executable with superquadric particles, rounded boxes and the bilinear law compiled in, from
 # Debian's own upstream tarball of the installed version (apt-get source; needs a deb-src entry,
 # which scripts/setup.sh adds).
 # Usage: build_liggghts.sh OUTPUT_DIR DOWNLOAD_DIR
@@ -37,6 +37,8 @@ grep -q "numneigh != NULL" "$src/finish.cpp" || { echo "finish.cpp fix did not a
 # The bilinear law, and only the model combinations this project uses: the generated list would
 # stop before the bilinear law, and compiling hundreds of combinations is most of the build time.
 cp "$here/normal_model_bilinear.h" "$src/"
+# Rounded boxes: pair_style roundedbox, fix wall/roundedbox and their per-atom contact history.
+cp "$here"/roundedbox_geometry.h "$here"/roundedbox_law.h "$here"/pair_roundedbox.* "$here"/fix_wall_roundedbox.* "$here"/fix_roundedbox_history.* "$src/"
 {
   for surface in SURFACE_DEFAULT SURFACE_SUPERQUADRIC; do
     for tangential in TANGENTIAL_HISTORY TANGENTIAL_NO_HISTORY; do
@@ -60,4 +62,5 @@ cd "$out"
 rm -rf "$work"
 styles="$("$out/liggghts" -log none -h 2>/dev/null || true)"
 grep -q "nve/superquadric" <<<"$styles" || { echo "the built executable lists no superquadric style" >&2; exit 6; }
+grep -q "roundedbox" <<<"$styles" || { echo "the built executable lists no roundedbox style" >&2; exit 6; }
 echo "built $out/liggghts"

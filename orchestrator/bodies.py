@@ -35,7 +35,9 @@ class BrickShape(Strict):
     """A brick (box) of length × width × thickness, realised as `kind` (orchestrator/shapes):
     `clump`, a clump of layout[0] × layout[1] × layout[2] spheres (see shapes/clump.py), or
     `superquadric`, one body with flat faces and rounded edges of the given blockiness (see
-    shapes/superquadric.py). Either way the body has the true brick's mass and inertia.
+    shapes/superquadric.py), or `rounded_box`, the box swept by a sphere of radius `rounding`, with
+    several contact points per touching face (see shapes/rounded_box.py). Every kind has the true
+    brick's mass and inertia.
 
     `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; clumps only).
     """
@@ -66,6 +68,8 @@ class BrickShape(Strict):
         if self.rounding and self.bevel_deg:
             raise ValueError(f"rounding: needs bevel_deg 0 (a brick bevelled by {self.bevel_deg!r}° has no rounded edges); "
                              f"allowed: 0 (got {self.rounding!r})")
+        if self.kind == "rounded_box" and not self.rounding:
+            raise ValueError(f"rounding: a rounded_box brick is swept by a sphere of this radius; allowed: [{MIN_SIZE:g}, {limit:g}) m (got 0)")
         if self.rounding and not MIN_SIZE <= self.rounding < limit:
             raise ValueError(f"rounding: allowed: 0, or [{MIN_SIZE:g}, {limit:g}) m (below half the smallest side) (got {self.rounding!r})")
         if self.kind == "clump":

@@ -29,8 +29,9 @@ class Capabilities:
     implicit: contact dynamics without stiffness (e_n², k_n and k_t unused); its step is
         `default_step`, not a fraction of a contact duration.
     state_file: the file `save_state` writes in the run directory (None: no restart file).
-    contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts).
-    shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric).
+    contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts),
+        except between bodies of the `unrecorded_kinds`.
+    shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric, rounded_box).
     mixed_kinds: bodies of several of those kinds in one case (a clump beside a superquadric).
     glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
     preferred_brick: the kind of brick the avalanche studies use on it unless told (chosen by
@@ -47,6 +48,7 @@ class Capabilities:
     default_step: float | None = None
     state_file: str | None = None
     contact_output: bool = False
+    unrecorded_kinds: tuple[str, ...] = ()
     shape_kinds: tuple[str, ...] = ("clump",)
     mixed_kinds: bool = False
     glued_kinds: tuple[str, ...] = ()
@@ -72,7 +74,7 @@ ENGINES: dict[str, EngineEntry] = {
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
                          implicit=False, state_file="state.restart", contact_output=True,
-                         shape_kinds=("clump", "superquadric"), glued_kinds=("clump", "superquadric"),
+                         unrecorded_kinds=("rounded_box",), shape_kinds=("clump", "superquadric", "rounded_box"), glued_kinds=("clump", "superquadric", "rounded_box"),
                          preferred_brick="superquadric"),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
             (("brick on brick, aligned_y, 40.2°", "slides 0.234 m: one superquadric contact under a face tilts to carry the "
@@ -128,6 +130,13 @@ def entry(name: str | Enum) -> EngineEntry:
 
 def capabilities(name: str | Enum) -> Capabilities:
     return entry(name).capabilities
+
+
+def brick_gaps(name: str | Enum) -> tuple[str, ...]:
+    """The brick-on-brick micro-cases the engine's preferred brick misses, each as "case: what was
+    measured" (its parity gaps): one brick on another's face should hold below atan μ and slide
+    above it at Coulomb's acceleration (docs/bricks.md, "Brick on brick")."""
+    return tuple(f"{case}: {why}" for case, why in entry(name).parity_gaps if case.startswith("brick on brick"))
 
 
 def engines_with(**wanted: Any) -> tuple[str, ...]:

@@ -286,6 +286,12 @@ def engine_limits(case: Case) -> str | None:
         able = [name for name in ENGINE_NAMES if capabilities(name).mixed_kinds and used_kinds <= set(capabilities(name).shape_kinds)]
         return (f"shapes: {engine} takes bodies of one kind per case ({' or '.join(can.shape_kinds)}), not {' and '.join(sorted(used_kinds))} "
                 f"together; give every shape one kind; engines that can mix kinds: {', '.join(able) or 'none'}")
+    unrecorded = sorted(used_kinds & set(can.unrecorded_kinds))
+    if case.record_contacts and unrecorded:
+        return f"record_contacts: {engine} does not record the contacts of {unrecorded[0]} bodies; allowed: false"
+    if "rounded_box" in used_kinds and case.law != ContactLaw.bilinear:
+        return (f"contacts.law: rounded_box bodies touch by the bilinear law of Richefeu et al. (2012) only; "
+                f"allowed: bilinear (got {case.law.value})")
     glued = {case.shape(c.shape).kind for c in case.bodies.clumps if c.fixed}
     for kind in sorted(glued - set(can.glued_kinds)):
         able = [name for name in ENGINE_NAMES if kind in capabilities(name).glued_kinds]

@@ -1,4 +1,4 @@
-"""Geometry checks of shaped bodies (clumps, superquadrics) before any engine starts.
+"""Geometry checks of shaped bodies (clumps, superquadrics, rounded boxes) before any engine starts.
 
 Spheres have exact tests in `preflight`; a shaped body is checked through its `BodyShape`:
 - overlaps: pairs whose bounding spheres meet and whose boxes (`extent`) overlap by more than the

@@ -21,6 +21,7 @@ import pytest
 from click.testing import CliRunner
 
 from orchestrator.shapes.clump import BrickClump
+from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.case import Case, parse_case
 from orchestrator.cli.main import main
 from orchestrator.studies.avalanche.packing import loose_grid
@@ -57,8 +58,11 @@ def free_fall_case(engine: str) -> Case:
 BRICK = {"length": 0.031, "width": 0.015, "thickness": 0.008, "layout": [4, 2, 1]}
 
 
-def pile_case(engine: str, count: int = 50, duration: float = 1.0) -> Case:
-    brick = BrickClump(BRICK["length"], BRICK["width"], BRICK["thickness"], 1700.0, tuple(BRICK["layout"]))
+def pile_case(engine: str, count: int = 50, duration: float = 1.0, kind: str = "clump") -> Case:
+    """`count` bricks (`kind`: the plain 4 × 2 × 1 clump, or the study's brick as a rounded box) rained
+    from a loose grid onto a floor, Table 1's constants."""
+    brick = (BrickClump(BRICK["length"], BRICK["width"], BRICK["thickness"], 1700.0, tuple(BRICK["layout"])) if kind == "clump"
+             else brick_rounded_box(BRICK["length"], BRICK["width"], BRICK["thickness"], 1700.0, 0.001))
     positions, orientations = loose_grid(brick, count, (-0.08, -0.08, 0.001), (5, 5), seed=7)
     return parse_case(
         {
@@ -70,7 +74,7 @@ def pile_case(engine: str, count: int = 50, duration: float = 1.0) -> Case:
                 {"materials": ["brick", "brick"], "law": "bilinear", "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27},
                 {"materials": ["brick", "board"], "law": "bilinear", "en2": 0.53, "mu": 0.46, "kn": 1e5, "kt_over_kn": 0.42},
             ],
-            "shapes": [{"name": "brick", **BRICK}],
+            "shapes": [{"name": "brick", **BRICK, **({"kind": kind, "rounding": 0.001} if kind != "clump" else {})}],
             "bodies": {
                 "clumps": [
                     {"shape": "brick", "material": "brick", "position": p.tolist(), "orientation": q.tolist()}

@@ -49,9 +49,9 @@ def pressed_spheres(engine: str, law: str, duration: float = 0.3) -> Case:
         "domain": {"lower": [-0.03, -0.03, -0.01], "upper": [0.03, 0.03, 0.06]}})
 
 
-def bricks_on_bricks(engine: str) -> Case:
-    """Twelve bricks dropped into a pile (bilinear law): clump–clump contacts at every late checkpoint."""
-    return pile_case(engine, count=12, duration=0.4)
+def bricks_on_bricks(engine: str, kind: str = "clump") -> Case:
+    """Twelve bricks dropped into a pile (bilinear law): brick–brick contacts at every late checkpoint."""
+    return pile_case(engine, count=12, duration=0.4, kind=kind)
 
 
 def _touching_pairs(trajectory: object, frame: int, case: Case) -> int:
@@ -64,10 +64,20 @@ def _touching_pairs(trajectory: object, frame: int, case: Case) -> int:
     return int(np.sum(np.linalg.norm(position[pairs[:, 0]] - position[pairs[:, 1]], axis=1) < radius[pairs].sum(axis=1)))
 
 
-@pytest.mark.parametrize("body", ["spheres, linear", "spheres, bilinear", "bricks"])
-@pytest.mark.parametrize("engine", ENGINES)
+ROUNDED_BOXES = pytest.param("liggghts", "rounded boxes", marks=[pytest.mark.engine, requires_liggghts], id="liggghts-rounded boxes")
+
+
+@pytest.mark.parametrize(("engine", "body"), [pytest.param(*engine.values, body, marks=engine.marks, id=f"{engine.values[0]}-{body}")
+                                             for engine in ENGINES for body in ("spheres, linear", "spheres, bilinear", "bricks")]
+                         + [ROUNDED_BOXES])
 def test_a_run_continued_from_a_checkpoint_with_bodies_in_contact_is_exact(engine: str, body: str, tmp_path: Path) -> None:
-    case = bricks_on_bricks(engine) if body == "bricks" else pressed_spheres(engine, body.split(", ")[1])
+    """Rounded boxes: their sub-contacts' histories (fix roundedbox/history) go into the checkpoint."""
+    if body == "bricks":
+        case = bricks_on_bricks(engine)
+    elif body == "rounded boxes":
+        case = bricks_on_bricks(engine, "rounded_box")
+    else:
+        case = pressed_spheres(engine, body.split(", ")[1])
     adapter = get_adapter(engine, RunOptions(checkpoint_interval=0.1))
     plan = make_plan(case, tmp_path)
     adapter.write_input(plan, tmp_path)
@@ -76,7 +86,7 @@ def test_a_run_continued_from_a_checkpoint_with_bodies_in_contact_is_exact(engin
     found = adapter.usable_checkpoints(plan, tmp_path)
     assert len(found) == 2
     for segment, (step, path) in enumerate(found, start=1):
-        if body != "bricks":  # spheres touch spheres at the checkpoint (clumps: their bounding spheres overlap in the pile)
+        if body.startswith("spheres"):  # spheres touch spheres at the checkpoint (clumps: their bounding spheres overlap in the pile)
             frame = int(np.argmin(np.abs(whole.time - step * plan.schedule.dt)))
             assert _touching_pairs(whole, frame, case) >= 5
         resumed = plan.resumed(Resume(segment, step, path.name))

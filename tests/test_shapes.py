@@ -1,4 +1,5 @@
-"""Body shapes (orchestrator/shapes): the registry, the superquadric brick's numbers, the case's checks.
+"""Body shapes (orchestrator/shapes): the registry, the superquadric's and the rounded box's numbers,
+the case's checks.
 
 No engine runs here: the superquadric's mass and inertia are the true brick's (shapes/clump.py's
 closed form, which test_brick_drop.py checks against the study's numbers), its own volume follows
@@ -15,6 +16,7 @@ import pytest
 from orchestrator.case import CaseError, parse_case
 from orchestrator.shapes import KINDS, make_shape
 from orchestrator.shapes.clump import rounded_box_moments
+from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.shapes.superquadric import brick_superquadric
 from orchestrator.studies.brick_drop import study_brick
 
@@ -30,9 +32,9 @@ def test_an_unknown_kind_names_the_kinds_that_exist() -> None:
     class Spec:
         kind = "polyhedron"
 
-    with pytest.raises(ValueError, match=r"shapes.kind: unknown kind 'polyhedron'; known: \['clump', 'superquadric'\]"):
+    with pytest.raises(ValueError, match=r"shapes.kind: unknown kind 'polyhedron'; known: \['clump', 'rounded_box', 'superquadric'\]"):
         make_shape(Spec(), 1700.0)
-    assert sorted(KINDS) == ["clump", "superquadric"]
+    assert sorted(KINDS) == ["clump", "rounded_box", "superquadric"]
 
 
 def test_the_superquadric_brick_has_the_true_brick_mass_and_inertia() -> None:
@@ -107,3 +109,39 @@ def test_a_superquadric_brick_cannot_be_bevelled() -> None:
 def test_blockiness_out_of_range_names_the_field() -> None:
     with pytest.raises(CaseError, match="blockiness"):
         parse_case(_case("liggghts", study_brick(kind="superquadric", blockiness=(1.0, 6.0))))
+
+
+def test_the_rounded_box_is_the_study_brick_in_closed_form() -> None:
+    """Mass and inertia: the rounded solid's (the study's I/m, 5 digits); the surface mesh's volume
+    converges on it (divergence theorem: within 0.02 % at resolution 24); every mesh vertex lies on
+    the surface (penetration 0 to 1e-15 m); the lowest point is the lowest inner corner less r."""
+    body = brick_rounded_box(0.031, 0.015, 0.008, 1700.0, 0.001)
+    assert body.kind == "rounded_box" and body.particles == 1 and body.face_contacts == 16
+    assert body.principal_inertia / body.mass == pytest.approx([2.36912e-5, 8.45563e-5, 9.77668e-5], rel=1e-5)
+    assert body.inner_half_extents == pytest.approx([0.0145, 0.0065, 0.003], abs=1e-15)
+    vertices, triangles = body.surface_mesh(24)
+    p = vertices[triangles]
+    mesh_volume = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0
+    assert mesh_volume == pytest.approx(body.volume, rel=2e-4)
+    assert np.abs(body.penetration(vertices)).max() < 1e-15
+    assert body.penetration(np.zeros((1, 3)))[0] == pytest.approx(0.004, abs=1e-15)  # the centre: 4 mm below the big face
+    farthest = np.linalg.norm(vertices, axis=1).max()  # the mesh misses the exact corner direction: within 0.1 %
+    assert farthest <= body.bounding_radius < farthest * 1.001
+    tilt = math.radians(30.0)
+    about_x = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(tilt), -math.sin(tilt)], [0.0, math.sin(tilt), math.cos(tilt)]])
+    assert body.lowest_points(np.stack([np.eye(3), about_x])) == pytest.approx(
+        [-0.004, -(0.0065 * math.sin(tilt) + 0.003 * math.cos(tilt)) - 0.001], abs=1e-15)
+
+
+def test_a_rounded_box_needs_its_rounding_and_the_bilinear_law() -> None:
+    with pytest.raises(CaseError, match=r"rounding: a rounded_box brick is swept by a sphere of this radius"):
+        parse_case(_case("liggghts", study_brick(kind="rounded_box", rounding=0.0)))
+    linear = _case("liggghts", study_brick(kind="rounded_box"))
+    linear["contacts"][0] = {"materials": ["brick", "brick"], "law": "linear", "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27}
+    with pytest.raises(CaseError, match=r"contacts.law: rounded_box bodies touch by the bilinear law .* allowed: bilinear \(got linear\)"):
+        parse_case(linear)
+    with pytest.raises(CaseError, match=r"record_contacts: liggghts does not record the contacts of rounded_box bodies; allowed: false"):
+        parse_case({**_case("liggghts", study_brick(kind="rounded_box")), "record_contacts": True})
+    with pytest.raises(CaseError, match=r"shapes.0.kind: yade takes clump bodies, not rounded_box; engines that can: liggghts"):
+        parse_case(_case("yade", study_brick(kind="rounded_box")))
+    parse_case(_case("liggghts", study_brick(kind="rounded_box")))

@@ -64,6 +64,8 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
             console.print(f"[yellow]set aside[/] an earlier packing {trial['directory']} ({trial['set_aside']['why']}): {trial['set_aside']['attic']}")
     if packing.get("warning"):
         console.print(f"[yellow]warning:[/] {packing['warning']}")
+    for gap in report.get("brick_gaps", []):
+        console.print(f"[yellow]warning:[/] this engine's {study.brick_spec.kind} brick misses the study's brick on brick: {gap}")
     lost = int(report.get("deposit", {}).get("bodies_lost", 0))
     if lost:
         console.print(f"[yellow]warning:[/] {lost} of {packing.get('bricks', '?')} bricks left the boards over an edge during the release "

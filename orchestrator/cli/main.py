@@ -42,7 +42,7 @@ from orchestrator.results import RESULTS
 from orchestrator.runner import render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
 from orchestrator import rundir as rundir_module
-from orchestrator.capabilities import capabilities
+from orchestrator.capabilities import brick_gaps, capabilities
 
 
 def _run(case_path: Path, engine: str | None, output: Path | None, timeout: float | None) -> dict[str, Any]:
@@ -208,6 +208,10 @@ def doctor() -> None:
             built = bool(status["superquadric_built"])
             details = str(status["superquadric_executable"]) if built else "not built yet: run `demorch build-contact` (about 6 min)"
             table.add_row(f"superquadric bodies ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
+    for name in ENGINE_NAMES:  # what each engine's avalanche brick misses against the study's code
+        gaps = brick_gaps(name)
+        if gaps:
+            table.add_row(f"avalanche brick ({name})", f"[yellow]{capabilities(name).preferred_brick}: {len(gaps)} gap(s)[/]", "; ".join(gaps))
     from orchestrator.studies.reference import PACKAGED_REFERENCE, reference_path
 
     reference = reference_path()

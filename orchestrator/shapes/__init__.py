@@ -9,6 +9,8 @@ engine declares the kinds it takes (`capabilities.Capabilities.shape_kinds`).
 Kinds:
 - `clump`: spheres rigidly joined (shapes/clump.py): every engine; faces are rows of spheres.
 - `superquadric`: one smooth body with flat faces and rounded edges (shapes/superquadric.py).
+- `rounded_box`: the 2012 study's brick, a box swept by a sphere, several contact points per touching
+  face (shapes/rounded_box.py; LIGGGHTS, with custom_contact/pair_roundedbox).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from orchestrator.shapes.clump import brick_clump
+from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.shapes.superquadric import brick_superquadric
 
 
@@ -65,6 +68,7 @@ class BodyShape(Protocol):
 KINDS: dict[str, Any] = {
     "clump": lambda s, density: brick_clump(s.length, s.width, s.thickness, density, s.layout, s.bevel_deg, s.mass, s.inertia, s.rounding),
     "superquadric": lambda s, density: brick_superquadric(s.length, s.width, s.thickness, density, s.blockiness, s.mass, s.inertia, s.rounding),
+    "rounded_box": lambda s, density: brick_rounded_box(s.length, s.width, s.thickness, density, s.rounding, s.mass, s.inertia),
 }
 
 

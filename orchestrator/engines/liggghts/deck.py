@@ -261,8 +261,10 @@ def body_context(case: Case, types: dict[str, int], starts_from_state: bool) -> 
     return {
         "dump_columns": " ".join(dump_columns(case)),
         "atom_style": "superquadric" if superquadric else "granular",
-        "surface": " surface superquadric" if superquadric else "",
+        "surface": " surface superquadric" if superquadric else "",  # pair_style gran's superquadric surface
         "superquadric": superquadric,
+        # rounded boxes: pair_style roundedbox and fix wall/roundedbox (custom_contact/) at this rounding
+        "rounding": superquadrics.rounding(case) if superquadric else None,
         "superquadric_sets": superquadrics.set_commands(case) if superquadric and not starts_from_state else [],
         "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
         "glued_ids": id_ranges(glued) if glued else "",

@@ -1,7 +1,11 @@
-"""Superquadric bodies on LIGGGHTS: data-file rows, the per-body settings, and their dump columns.
+"""One-atom bodies on LIGGGHTS (superquadrics, rounded boxes): data-file rows, the per-body settings,
+and their dump columns.
 
-Each superquadric brick is one atom of `atom_style superquadric` (the source-built LIGGGHTS, see
-plugin.ensure_superquadric_liggghts). The data file gives its half-axes, blockiness and a density;
+Each such brick is one atom of `atom_style superquadric` (the source-built LIGGGHTS, see
+plugin.ensure_superquadric_liggghts). A rounded box is that atom too: its `shape` is the box's outer
+half extents, and `pair_style roundedbox` / `fix wall/roundedbox` (custom_contact/) make its
+contacts, taking the inner box as `shape` less the rounding; its blockiness only sizes LIGGGHTS'
+own bounding radius (ROUNDED_BOX_BLOCKINESS). The data file gives its half-axes, blockiness and a density;
 `set atom` then gives it the true brick's mass and principal moments (LIGGGHTS would otherwise take
 those of the superquadric's own volume), its orientation, and its spin (after the orientation and
 inertia, since LIGGGHTS turns the spin into an angular momentum with both).
@@ -10,29 +14,56 @@ inertia, since LIGGGHTS turns the spin into an angular momentum with both).
 from __future__ import annotations
 
 from orchestrator.case import Case
-from orchestrator.shapes.superquadric import BrickSuperquadric
+from orchestrator.shapes import BodyShape
 
 # Dump columns of a superquadric run: quat1..4 are the orientation (w, x, y, z).
 SUPERQUADRIC_COLUMNS = ("id", "type", "mass", "radius", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz",
                         "quat1", "quat2", "quat3", "quat4")
 
 
+# Kinds whose body is one atom of `atom_style superquadric`.
+ONE_ATOM_KINDS = ("superquadric", "rounded_box")
+# A rounded box's blockiness in the data file: LIGGGHTS sizes the atom's radius (the dump's) from it;
+# at 12 that radius is within 2 % of the box's corner.
+ROUNDED_BOX_BLOCKINESS = (12.0, 12.0)
+
+
 def is_superquadric_case(case: Case) -> bool:
-    return any(case.shape(c.shape).kind == "superquadric" for c in case.bodies.clumps)
+    """Whether the case's bodies are one atom each (superquadrics or rounded boxes)."""
+    return any(case.shape(c.shape).kind in ONE_ATOM_KINDS for c in case.bodies.clumps)
 
 
-def bodies(case: Case) -> list[BrickSuperquadric]:
-    return [case.shape(c.shape).body(case.material(c.material).density) for c in case.bodies.clumps]  # type: ignore[misc]
+def rounding(case: Case) -> float | None:
+    """The rounding radius (m) of a case of rounded boxes (pair_style roundedbox takes one), else None.
+
+    Raises ValueError naming the shapes when their roundings differ."""
+    values = {float(case.shape(c.shape).rounding) for c in case.bodies.clumps if case.shape(c.shape).kind == "rounded_box"}
+    if len(values) > 1:
+        raise ValueError(f"shapes.rounding: LIGGGHTS takes one rounding for all rounded_box bodies of a case; got {sorted(values)}")
+    return values.pop() if values else None
+
+
+def _data_shape(body: BodyShape) -> tuple[tuple[float, float, float], tuple[float, float], float]:
+    """(half-axes m, blockiness, density kg/m³) of a body's data-file row: LIGGGHTS' own mass of these
+    is overwritten by `set atom … mass` (set_commands)."""
+    a, b, c = (float(v) for v in body.half_axes)  # type: ignore[attr-defined]
+    if body.kind == "rounded_box":
+        return (a, b, c), ROUNDED_BOX_BLOCKINESS, body.mass / (8.0 * a * b * c)
+    n1, n2 = body.blockiness  # type: ignore[attr-defined]
+    return (a, b, c), (float(n1), float(n2)), body.engine_density  # type: ignore[attr-defined]
+
+
+def bodies(case: Case) -> list[BodyShape]:
+    return [case.shape(c.shape).body(case.material(c.material).density) for c in case.bodies.clumps]
 
 
 def atom_rows(case: Case, types: dict[str, int]) -> list[str]:
     """Atoms rows `id type density a b c n1 n2 x y z`, one per body in case order (atom id = body index + 1)."""
     rows = []
     for i, (c, body) in enumerate(zip(case.bodies.clumps, bodies(case)), start=1):
-        a, b, h = (float(v) for v in body.half_axes)
-        n1, n2 = body.blockiness
+        (a, b, h), (n1, n2), density = _data_shape(body)
         x, y, z = c.position
-        rows.append(f"{i} {types[c.material]} {body.engine_density!r} {a!r} {b!r} {h!r} {float(n1)!r} {float(n2)!r} {x!r} {y!r} {z!r}")
+        rows.append(f"{i} {types[c.material]} {density!r} {a!r} {b!r} {h!r} {n1!r} {n2!r} {x!r} {y!r} {z!r}")
     return rows
 
 

@@ -44,7 +44,8 @@ def write_report(outdir: Path, report: dict[str, Any]) -> Path:
     chains = [figures / "force_chains.png"] if trajectory.contacts is not None else []
     if chains:
         plot_force_chains(trajectory, chains[0])
-    return write_html(figures, outdir.name, study_rows(report), [figures / "deposit.png", *chains, figures / "front.png", *snapshots])
+    return write_html(figures, outdir.name, study_rows(report), [figures / "deposit.png", *chains, figures / "front.png", *snapshots],
+                      [f"This engine's {study.brick_spec.kind} brick misses the study's brick on brick: {gap}" for gap in report.get("brick_gaps", [])])
 
 
 FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
@@ -195,7 +196,9 @@ def export_vtk(trajectory: Trajectory, outdir: Path, every: int = 1) -> list[Pat
     return paths
 
 
-def write_html(outdir: Path, title: str, rows: list[Row], images: list[Path]) -> Path:
+def write_html(outdir: Path, title: str, rows: list[Row], images: list[Path], warnings: list[str] | None = None) -> Path:
+    """index.html: the title, the warnings (one paragraph each), the metrics table, the figures."""
+    notes = "".join(f'<p class="warning">{html.escape(text)}</p>' for text in warnings or [])
     table = "\n".join(
         f"<tr><td>{html.escape(name)}</td><td>{value:.4g}</td><td>{html.escape(ref)}</td><td>{html.escape(verdict)}</td></tr>"
         for name, value, ref, verdict in rows
@@ -203,8 +206,8 @@ def write_html(outdir: Path, title: str, rows: list[Row], images: list[Path]) ->
     figures = "\n".join(f'<figure><img src="{html.escape(p.name)}" alt="{html.escape(p.stem)}"></figure>' for p in images)
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>body{{font-family:sans-serif;margin:2em;max-width:1100px}}table{{border-collapse:collapse}}
-td,th{{border:1px solid #ccc;padding:4px 10px}}img{{max-width:100%}}figure{{margin:1em 0}}</style></head>
-<body><h1>{html.escape(title)}</h1><p>Positions: {html.escape(FRAME)}.</p><table><tr><th>metric</th><th>value</th><th>reference</th><th>check</th></tr>
+td,th{{border:1px solid #ccc;padding:4px 10px}}img{{max-width:100%}}figure{{margin:1em 0}}.warning{{color:#8a5a00}}</style></head>
+<body><h1>{html.escape(title)}</h1>{notes}<p>Positions: {html.escape(FRAME)}.</p><table><tr><th>metric</th><th>value</th><th>reference</th><th>check</th></tr>
 {table}</table>{figures}</body></html>"""
     path = outdir / "index.html"
     path.write_text(page)

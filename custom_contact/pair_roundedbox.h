@@ -1,0 +1,50 @@
+/* Rounded boxes touching rounded boxes, several contact points per pair, for LIGGGHTS 3.8.
+ *
+ * Written for dem-orchestrator:  pair_style roundedbox rounding R   and   pair_coeff * *
+ * Bodies are atoms of `atom_style superquadric` (the source-built LIGGGHTS): `shape` gives the
+ * outer half extents, the inner box is shape - R, the quaternion its orientation; blockiness,
+ * the superquadric's own volume and radius play no part. Every sub-contact between two bodies
+ * (roundedbox_geometry.h) carries the law of roundedbox_law.h with the type pair's constants from
+ * the same `fix property/global` matrices as `pair_style gran model bilinear`: kn, kt,
+ * coefficientRestitutionSquared, coefficientFriction. Needs `newton off`. Histories live in a
+ * fix roundedbox/history (ID roundedbox_history) that this pair style creates.
+ */
+#ifdef PAIR_CLASS
+
+PairStyle(roundedbox,PairRoundedBox)
+
+#else
+
+#ifndef DEMORCH_PAIR_ROUNDEDBOX_H
+#define DEMORCH_PAIR_ROUNDEDBOX_H
+
+#include "pair.h"
+#include "roundedbox_law.h"
+
+namespace LAMMPS_NS {
+
+class PairRoundedBox : public Pair {
+ public:
+  PairRoundedBox(class LAMMPS *);
+  ~PairRoundedBox();
+  void compute(int, int);
+  void settings(int, char **);
+  void coeff(int, char **);
+  void init_style();
+  double init_one(int, int);
+  // the contact constants of a type pair, and a body as a rounded box (also used by fix wall/roundedbox)
+  static void read_constants(class LAMMPS *, const char *caller, int ntypes, RoundedBox::Constants **&table);
+  static void body(class Atom *, int i, double rounding, RoundedBox::Box &box);
+
+ protected:
+  double rounding_;
+  double reach_;  // largest distance from a centre to its surface, over all bodies (m)
+  RoundedBox::Constants **constants_;
+  class FixRoundedBoxHistory *history_;
+  void allocate();
+};
+
+}
+
+#endif
+#endif
