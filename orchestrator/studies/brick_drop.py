@@ -135,6 +135,17 @@ class Drop:
             return 0
         return int(moving[-1]) + 1 if moving[-1] + 1 < len(self.time) else None
 
+    def corner_error(self, frame: int, half_extents: np.ndarray, centre: np.ndarray, yaw_deg: float) -> float:
+        """m; mean distance from each corner of the brick's box (half_extents (3,) m) at `frame` to the
+        nearest corner of the same box lying flat at `centre` (3,) m turned by `yaw_deg` about z: how far
+        the resting brick is from a reference pose (a box's corners are the same set under its half-turns)."""
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        yaw = math.radians(yaw_deg)
+        turn = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+        here = self.centre[frame] + (signs * half_extents) @ self.rotation[frame].T
+        there = np.asarray(centre) + (signs * half_extents) @ turn.T
+        return float(np.linalg.norm(here[:, None] - there[None], axis=2).min(axis=1).mean())
+
     def lying_flat(self, frame: int) -> bool:
         return bool(abs(self.rotation[frame, 2, 2]) >= math.cos(math.radians(FLAT_TILT_DEG)))
 
