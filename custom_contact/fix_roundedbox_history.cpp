@@ -31,12 +31,22 @@ void FixRoundedBoxHistory::begin(int nlocal)
   for (int i = 0; i < nlocal; i++) next_[i].clear();
 }
 
+namespace {
+// slots are kept sorted by (partner, key): a brick in a pile has a hundred, looked up 16 times a pair
+bool slotBefore(const FixRoundedBoxHistory::Slot &a, const FixRoundedBoxHistory::Slot &b)
+{
+  return a.partner < b.partner || (a.partner == b.partner && a.key < b.key);
+}
+}
+
 const RoundedBox::History *FixRoundedBoxHistory::find(int i, double partner, int key) const
 {
   const std::vector<Slot> &slots = current_[i];
-  for (size_t s = 0; s < slots.size(); s++)
-    if (slots[s].key == key && slots[s].partner == partner) return &slots[s].history;
-  return NULL;
+  Slot wanted;
+  wanted.partner = partner;
+  wanted.key = key;
+  std::vector<Slot>::const_iterator at = std::lower_bound(slots.begin(), slots.end(), wanted, slotBefore);
+  return at != slots.end() && at->partner == partner && at->key == key ? &at->history : NULL;
 }
 
 void FixRoundedBoxHistory::store(int i, double partner, int key, const RoundedBox::History &history)
@@ -52,7 +62,10 @@ void FixRoundedBoxHistory::store(int i, double partner, int key, const RoundedBo
 
 void FixRoundedBoxHistory::commit(int nlocal)
 {
-  for (int i = 0; i < nlocal; i++) current_[i].swap(next_[i]);
+  for (int i = 0; i < nlocal; i++) {
+    std::sort(next_[i].begin(), next_[i].end(), slotBefore);
+    current_[i].swap(next_[i]);
+  }
 }
 
 void FixRoundedBoxHistory::grow_arrays(int nmax)
@@ -96,6 +109,7 @@ int FixRoundedBoxHistory::unpack(std::vector<Slot> &slots, const double *buf)
     slots[s].history.overlap = buf[m++];
     for (int k = 0; k < 3; k++) slots[s].history.ft[k] = buf[m++];
   }
+  std::sort(slots.begin(), slots.end(), slotBefore);
   return m;
 }
 

@@ -169,6 +169,11 @@ void PairRoundedBox::compute(int eflag, int vflag)
       // A is the lower tag: the same pair gives the same numbers on every process
       const bool i_first = tag[i] < tag[j];
       const int a = i_first ? i : j, b = i_first ? j : i;
+      // bounding spheres first: most neighbours do not touch
+      const double *sa = atom->shape[a], *sb = atom->shape[b];
+      const double d[3] = { x[a][0] - x[b][0], x[a][1] - x[b][1], x[a][2] - x[b][2] };
+      const double reach = std::sqrt(sa[0] * sa[0] + sa[1] * sa[1] + sa[2] * sa[2]) + std::sqrt(sb[0] * sb[0] + sb[1] * sb[1] + sb[2] * sb[2]);
+      if (dot(d, d) >= reach * reach) continue;
       body(atom, a, rounding_, A);
       body(atom, b, rounding_, B);
       const int n = boxBoxContacts(A, B, sub);
