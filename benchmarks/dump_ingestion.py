@@ -27,6 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -38,6 +39,7 @@ from orchestrator.case import parse_case  # noqa: E402
 from orchestrator.engines.liggghts.deck import CLUMP_COLUMNS  # noqa: E402
 from orchestrator.engines.liggghts.dump import clump_states, read_binary_dump, read_dump  # noqa: E402
 from orchestrator.engines.common import read_frames  # noqa: E402
+from orchestrator.plan import clump_shapes  # noqa: E402
 
 BRICKS = 6300
 LAYOUT = (4, 2, 1)
@@ -148,7 +150,7 @@ def main() -> None:
 
         def binary_to_states() -> None:
             _, parsed = read_binary_dump(binary_path, len(CLUMP_COLUMNS))
-            states = clump_states(case, column, parsed)
+            states = clump_states(SimpleNamespace(case=case, shapes=clump_shapes(case)), column, parsed)  # the two fields it reads of a plan
             assert np.allclose(states[0][0], positions)
 
         results = {}

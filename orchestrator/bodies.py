@@ -7,13 +7,10 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from orchestrator.fields import AngularVelocity, Name, Position, QuaternionPart, Real, Strict, Velocity
+from orchestrator.fields import MIN_SIZE, AngularVelocity, Name, Position, QuaternionPart, Real, Strict, Velocity
 from orchestrator.shapes import KINDS, BodyShape, make_shape
+from orchestrator.shapes import kind as shape_kind
 from orchestrator.shapes.clump import BrickClump
-
-# m: the smallest length of any body (a sphere's radius, a brick's sides and rounding, a clump's
-# spheres): a smaller body's mass and inertia underflow in the engines, and it falls through its support.
-MIN_SIZE = 1e-6
 
 
 class Sphere(Strict):
@@ -31,28 +28,17 @@ class Sphere(Strict):
 ShapeKind = Literal[tuple(KINDS)]  # type: ignore[valid-type]
 
 
-class BrickShape(Strict):
-    """A brick (box) of length × width × thickness, realised as `kind` (orchestrator/shapes):
-    `clump`, a clump of layout[0] × layout[1] × layout[2] spheres (see shapes/clump.py), or
-    `superquadric`, one body with flat faces and rounded edges of the given blockiness (see
-    shapes/superquadric.py), or `rounded_box`, the box swept by a sphere of radius `rounding`, with
-    several contact points per touching face (see shapes/rounded_box.py). Every kind has the true
-    brick's mass and inertia.
+class Brick(Strict):
+    """The one schema of a brick: its sides, kind and the kind's parameters, checked together.
+    A case's shape entry (`BrickShape`) and a study's brick (studies/avalanche/spec.py `BrickSpec`)
+    are this schema with their own extra fields."""
 
-    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; clumps only).
-    """
-
-    name: Name
-    kind: ShapeKind = "clump"
+    kind: ShapeKind | None = "clump"
     length: Real(unit="m", ge=MIN_SIZE, le=10.0)
     width: Real(unit="m", ge=MIN_SIZE, le=10.0)
     thickness: Real(unit="m", ge=MIN_SIZE, le=10.0)
     layout: tuple[Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)], Annotated[int, Field(ge=1, le=64)]] = (4, 2, 1)
     bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0
-    # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
-    # thickness axes) when given; default: those of the (rounded) box at the material's density.
-    mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
-    inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
     # Edges and corners rounded at this radius (m; 0, or from MIN_SIZE): eight corner spheres join the layout (shapes/clump.py).
     # The 2012 study's brick: 0.001 (its drops are reproduced: tests/test_brick_drop.py).
     rounding: Real(unit="m", ge=0.0, le=1.0) = 0.0
@@ -61,23 +47,44 @@ class BrickShape(Strict):
     blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
 
     @model_validator(mode="after")
-    def _physical_inertia(self) -> "BrickShape":
-        if self.kind != "clump" and self.bevel_deg:
-            raise ValueError(f"bevel_deg: a {self.kind} brick has no bevelled faces; allowed: 0, or kind: clump (got {self.bevel_deg!r})")
+    def _a_brick_of_its_kind(self) -> "Brick":
         limit = min(self.length, self.width, self.thickness) / 2.0
         if self.rounding and self.bevel_deg:
             raise ValueError(f"rounding: needs bevel_deg 0 (a brick bevelled by {self.bevel_deg!r}° has no rounded edges); "
                              f"allowed: 0 (got {self.rounding!r})")
-        if self.kind == "rounded_box" and not self.rounding:
-            raise ValueError(f"rounding: a rounded_box brick is swept by a sphere of this radius; allowed: [{MIN_SIZE:g}, {limit:g}) m (got 0)")
         if self.rounding and not MIN_SIZE <= self.rounding < limit:
             raise ValueError(f"rounding: allowed: 0, or [{MIN_SIZE:g}, {limit:g}) m (below half the smallest side) (got {self.rounding!r})")
-        if self.kind == "clump":
-            smallest = float(self.body(1.0).radii.min())  # thickness / (2 layout[2]), less INSET × rounding; thinner at a bevel's end
-            if smallest < MIN_SIZE:
-                raise ValueError(f"layout: the clump's smallest sphere would be {smallest:.3g} m in radius; allowed: at least {MIN_SIZE:g} m "
-                                 f"(fewer spheres across the thickness{', less rounding' if self.rounding else ''}"
-                                 f"{', a smaller bevel' if self.bevel_deg else ''}) (got {list(self.layout)})")
+        problem = shape_kind(self.kind).check(self) if self.kind else None  # None: a study's brick, the engine's preferred kind
+        if problem:
+            raise ValueError(problem)
+        return self
+
+    def entry(self, name: str = "brick", **extra: object) -> dict[str, object]:
+        """This brick as a case's shape entry (JSON-ready; `extra`: mass, inertia), a clump when `kind` is unset."""
+        fields = self.model_dump(mode="json", include=set(Brick.model_fields))
+        return {**fields, "name": name, "kind": self.kind or "clump", **extra}
+
+
+class BrickShape(Brick):
+    """The one schema of a brick (box) of length × width × thickness, realised as `kind`
+    (orchestrator/shapes): `clump`, a clump of layout[0] × layout[1] × layout[2] spheres (see
+    shapes/clump.py), or `superquadric`, one body with flat faces and rounded edges of the given
+    blockiness (see shapes/superquadric.py), or `rounded_box`, the box swept by a sphere of radius
+    `rounding`, with several contact points per touching face (see shapes/rounded_box.py). Every
+    kind has the true brick's mass and inertia (given below, or the rounded box's at the density).
+
+    `bevel_deg` > 0 turns three faces by that angle (the paper's modified bricks; clumps only).
+    """
+
+    name: Name
+    kind: ShapeKind = "clump"
+    # The body's mass (kg) and principal moments of inertia (kg m², about the length, width and
+    # thickness axes) when given; default: those of the (rounded) box at the material's density.
+    mass: Real(unit="kg", gt=0.0, le=1e4) | None = None
+    inertia: tuple[Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4), Real(unit="kg m²", gt=0.0, le=1e4)] | None = None
+
+    @model_validator(mode="after")
+    def _physical_inertia(self) -> "BrickShape":
         if self.inertia is not None:
             a, b, c = sorted(self.inertia)
             if c > a + b:

@@ -289,9 +289,10 @@ def engine_limits(case: Case) -> str | None:
     unrecorded = sorted(used_kinds & set(can.unrecorded_kinds))
     if case.record_contacts and unrecorded:
         return f"record_contacts: {engine} does not record the contacts of {unrecorded[0]} bodies; allowed: false"
-    if "rounded_box" in used_kinds and case.law != ContactLaw.bilinear:
-        return (f"contacts.law: rounded_box bodies touch by the bilinear law of Richefeu et al. (2012) only; "
-                f"allowed: bilinear (got {case.law.value})")
+    for kind in sorted(used_kinds & set(can.bilinear_only_kinds)):
+        if case.law != ContactLaw.bilinear:
+            return (f"contacts.law: {kind} bodies touch by the bilinear law of Richefeu et al. (2012) only on {engine}; "
+                    f"allowed: bilinear (got {case.law.value})")
     glued = {case.shape(c.shape).kind for c in case.bodies.clumps if c.fixed}
     for kind in sorted(glued - set(can.glued_kinds)):
         able = [name for name in ENGINE_NAMES if kind in capabilities(name).glued_kinds]

@@ -9,6 +9,10 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 # Names end up in LIGGGHTS decks (group/fix ids) and YADE scripts; a strict pattern keeps them
 # inert there and makes quotes, spaces and newlines a validation error rather than an injection.
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]{0,39}$"
+
+# m: the smallest length of any body (a sphere's radius, a brick's sides and rounding, a clump's
+# spheres): a smaller body's mass and inertia underflow in the engines, and it falls through its support.
+MIN_SIZE = 1e-6
 Name = Annotated[str, Field(pattern=NAME_PATTERN)]
 
 

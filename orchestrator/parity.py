@@ -35,17 +35,19 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator.shapes.clump import brick_clump, quaternion_matrices, quaternion_matrix
+from orchestrator.bodies import BrickShape
+from orchestrator.shapes.clump import quaternion_matrices, quaternion_matrix
 from orchestrator.case import Case, parse_case
 from orchestrator.engines import EngineError
 from orchestrator.capabilities import ENGINE_NAMES, ENGINES, engines_with
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
 from orchestrator.studies import brick_drop, brick_pair
+from orchestrator.studies.avalanche.spec import BrickSpec
 
 EN2, SPEED, RADIUS, MU = 0.53, 0.5, 0.005, 0.46
 TILTED = (0.981060262190, 0.172987393925, 0.085831651177, -0.015134435901)  # Ry(10°)·Rx(20°), (w, x, y, z)
-BRICK = {"name": "brick", "length": 0.031, "width": 0.015, "thickness": 0.008}
+BRICK = BrickSpec(rounding=0.0).entry("brick")  # the study's brick, sharp (a box's mass and inertia at the material's density)
 FLOOR = {"type": "rectangle", "name": "floor", "material": "board", "origin": [-0.1, -0.1, 0.0], "edge1": [0.2, 0.0, 0.0], "edge2": [0.0, 0.2, 0.0]}
 # A square of four triangles around its centre: edges shared by two, the centre by all four.
 FAN = [[[0.0, 0.0, 0.0], [-0.1, -0.1, 0.0], [0.1, -0.1, 0.0]], [[0.0, 0.0, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0]],
@@ -130,13 +132,13 @@ def _clump_flat(layout: list[int]) -> Callable[[str, Path], Case]:
     return lambda engine, directory: _drop(engine, {"clumps": [clump]}, [FLOOR], [{**BRICK, "layout": layout}])
 
 
-ROUNDED = {**BRICK, "layout": [4, 2, 1], "rounding": 0.001}  # the default brick of the brick studies
+ROUNDED = BrickSpec().entry("brick")  # the default brick of the brick studies (4 × 2 × 1 and 1 mm corner spheres)
 
 
 def _corner_sphere() -> tuple[np.ndarray, float, float]:
     """(body-frame centre, radius, height of the clump's centre) of the rounded brick's lowest sphere
     when it is turned by TILTED with that sphere 0.1 mm above the floor."""
-    clump = brick_clump(ROUNDED["length"], ROUNDED["width"], ROUNDED["thickness"], 2500.0, (4, 2, 1), rounding=ROUNDED["rounding"])
+    clump = BrickShape(**ROUNDED).clump(2500.0)
     heights = (clump.centres @ quaternion_matrix(TILTED).T)[:, 2] - clump.radii
     lowest = int(np.argmin(heights))
     return clump.centres[lowest], float(clump.radii[lowest]), 1e-4 - float(heights[lowest])

@@ -22,6 +22,7 @@ from orchestrator import geometry, physics, preflight
 from orchestrator.capabilities import capabilities
 from orchestrator.case import Case, Domain
 from orchestrator.estimate import OutputEstimate, estimate
+from orchestrator.shapes import BodyShape
 
 
 @dataclass(frozen=True)
@@ -61,8 +62,9 @@ class RunPlan:
     bodies: one BodyInfo per body in results.h5 order. pairs: the constants of every listed pair,
     with the dashpot an engine without the compiled law uses in its place. wall_triangles: (t, 3, 3)
     per wall, in case order (m). removals: wall name → removal step. rest: None without
-    stop_at_rest. output: what the run will write and hold in memory. resume: the checkpoint a
-    continued run starts from (None: from t = 0).
+    stop_at_rest. output: what the run will write and hold in memory. shapes: one per clump, in case
+    order, its shape at its material's density (what engines realise; bodies of one shape and
+    material share one object). resume: the checkpoint a continued run starts from (None: from t = 0).
     """
 
     case: Case
@@ -75,6 +77,7 @@ class RunPlan:
     removals: Mapping[str, int]
     rest: RestChecks | None
     output: OutputEstimate
+    shapes: tuple[BodyShape, ...]
     resume: Resume | None = None
 
     @property
@@ -128,7 +131,17 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
         removals=MappingProxyType(removals),
         rest=rest_checks(case, schedule, removals, table),
         output=output,
+        shapes=clump_shapes(case),
     )
+
+
+def clump_shapes(case: Case) -> tuple[BodyShape, ...]:
+    """Each clump's body shape, in case order (one object per shape and material)."""
+    built: dict[tuple[str, str], BodyShape] = {}
+    for c in case.bodies.clumps:
+        if (c.shape, c.material) not in built:
+            built[(c.shape, c.material)] = case.shape(c.shape).body(case.material(c.material).density)
+    return tuple(built[(c.shape, c.material)] for c in case.bodies.clumps)
 
 
 def rest_checks(case: Case, schedule: physics.Schedule, removals: Mapping[str, int],

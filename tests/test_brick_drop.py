@@ -77,11 +77,15 @@ def test_the_rounded_brick_has_the_study_volume_and_inertia() -> None:
     assert abs(corners).max(axis=0) == pytest.approx([0.0145, 0.0065, 0.003])  # tangent to the three faces
 
 
-def test_yade_stand_in_is_calibrated_only_where_one_factor_serves_every_body() -> None:
+def test_yade_stand_in_is_calibrated_only_where_one_factor_serves_every_body(tmp_path: Path) -> None:
     """1/√N on every dashpot when all bodies are clumps with N spheres on their largest face; no
     factor, and a warning, when clumps of several N (or spheres beside clumps) share the case."""
-    from orchestrator.engines.yade.materials import stand_in_scale
+    from orchestrator.engines.yade.materials import stand_in_scale as scale_of_plan
+    from orchestrator.plan import make_plan
     from orchestrator.studies.brick_drop import drop_case, study_brick
+
+    def stand_in_scale(case):
+        return scale_of_plan(make_plan(case, tmp_path))
 
     rounded = drop_case("yade", study_brick(), "A", False)
     assert stand_in_scale(rounded) == (pytest.approx(0.5), None)

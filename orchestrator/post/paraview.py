@@ -2,8 +2,8 @@
 
 `write_series(case, trajectory, outdir, stride)` writes into `outdir`
     bodies.pvd          ParaView's collection: per written frame, one <DataSet timestep="t (s)" part="p"
-                        name="kind" file="…"/> per body kind present in the run (sphere, clump,
-                        superquadric, rounded_box: part = its index in KINDS), which ParaView shows as one block per
+                        name="kind" file="…"/> per body kind present in the run (sphere, then the
+                        shape kinds: part = its index in KINDS), which ParaView shows as one block per
                         kind (colour or hide the kinds apart in its Multiblock Inspector)
     bodies_KIND_FFFFF.vtu   frame F, the bodies of one kind: their surfaces as one `triangle` cell
                         block (what meshio.read gives back); point data `velocity` (m/s, the body's
@@ -44,10 +44,11 @@ import numpy as np
 from orchestrator.case import Case
 from orchestrator.post.contacts import force_chains
 from orchestrator.results import Contacts, Trajectory, safe_output_path
+from orchestrator.shapes import KINDS as SHAPE_KINDS
 from orchestrator.shapes.clump import quaternion_matrices, unit_sphere_mesh
 
-KINDS = ("sphere", "clump", "superquadric", "rounded_box")  # the parts of a frame, in this order
-RESOLUTION = {"sphere": 8, "clump": 8, "superquadric": 12, "rounded_box": 8}  # latitudes of a surface mesh, per kind
+KINDS = ("sphere", *SHAPE_KINDS)  # the parts of a frame, in this order
+RESOLUTION = {"sphere": 8, **{name: kind.mesh_resolution for name, kind in SHAPE_KINDS.items()}}  # latitudes of a surface mesh, per kind
 BODIES, CONTACTS = "bodies", "contacts"  # the two series' names: NAME.pvd, NAME_FFFFF.vtu
 
 

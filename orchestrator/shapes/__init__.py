@@ -15,13 +15,12 @@ Kinds:
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
-from orchestrator.shapes.clump import brick_clump
-from orchestrator.shapes.rounded_box import brick_rounded_box
-from orchestrator.shapes.superquadric import brick_superquadric
+from orchestrator.shapes import clump, rounded_box, superquadric
 
 
 class BodyShape(Protocol):
@@ -65,19 +64,34 @@ class BodyShape(Protocol):
     def probes(self) -> tuple[np.ndarray, np.ndarray]: ...  # spheres (n, 3) m, (n,) m whose union fills the solid to its surface (radius 0: surface points)
 
 
-KINDS: dict[str, Any] = {
-    "clump": lambda s, density: brick_clump(s.length, s.width, s.thickness, density, s.layout, s.bevel_deg, s.mass, s.inertia, s.rounding),
-    "superquadric": lambda s, density: brick_superquadric(s.length, s.width, s.thickness, density, s.blockiness, s.mass, s.inertia, s.rounding),
-    "rounded_box": lambda s, density: brick_rounded_box(s.length, s.width, s.thickness, density, s.rounding, s.mass, s.inertia),
+@dataclass(frozen=True)
+class Kind:
+    """One kind of body shape: its module's builder from a shape entry (bodies.BrickShape) at a
+    density (kg/m³), its own checks of that entry (a one-line field error, or None), and how many
+    latitudes its ParaView surface mesh gets."""
+
+    build: Callable[[Any, float], BodyShape]
+    check: Callable[[Any], str | None]
+    mesh_resolution: int
+
+
+KINDS: dict[str, Kind] = {
+    "clump": Kind(clump.from_spec, clump.check_spec, 8),
+    "superquadric": Kind(superquadric.from_spec, superquadric.no_bevel, 12),
+    "rounded_box": Kind(rounded_box.from_spec, rounded_box.check_spec, 8),
 }
 
 
+def kind(name: str) -> Kind:
+    """The kind called `name`; ValueError naming the kinds that exist when there is none."""
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise ValueError(f"shapes.kind: unknown kind {name!r}; known: {sorted(KINDS)}") from None
+
+
 def make_shape(spec: Any, density: float) -> BodyShape:
-    """The body shape of a case's shape entry (`case.BrickShape`) at a material's density (kg/m³).
+    """The body shape of a case's shape entry (`bodies.BrickShape`) at a material's density (kg/m³).
 
     Raises ValueError naming the kinds that exist when `spec.kind` is none of them."""
-    try:
-        build = KINDS[spec.kind]
-    except KeyError:
-        raise ValueError(f"shapes.kind: unknown kind {spec.kind!r}; known: {sorted(KINDS)}") from None
-    return build(spec, density)
+    return kind(spec.kind).build(spec, density)

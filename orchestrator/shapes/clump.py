@@ -25,6 +25,8 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
+from orchestrator.fields import MIN_SIZE
+
 
 INSET = 0.25  # of the rounding radius: how far the layout's spheres stay inside the faces of a rounded brick
 
@@ -339,3 +341,20 @@ def unit_sphere_mesh(resolution: int) -> tuple[np.ndarray, np.ndarray]:
             a, b, c, d = 1 + i * n_around + j, 1 + i * n_around + k, 1 + (i + 1) * n_around + k, 1 + (i + 1) * n_around + j
             triangles += [(a, b, c), (a, c, d)]
     return vertices, np.array(triangles, dtype=np.int64)
+
+
+def from_spec(spec, density: float) -> BrickClump:
+    """The clump of a shape entry (bodies.BrickShape: length, width, thickness, layout, bevel_deg,
+    rounding, mass, inertia) at `density` kg/m³."""
+    return brick_clump(spec.length, spec.width, spec.thickness, density, spec.layout, spec.bevel_deg, spec.mass, spec.inertia, spec.rounding)
+
+
+def check_spec(spec) -> str | None:
+    """The clump's own limit on a shape entry, as a one-line field error (None: fine): its smallest
+    sphere must be at least MIN_SIZE (bodies.MIN_SIZE) across."""
+    smallest = float(brick_clump(spec.length, spec.width, spec.thickness, 1.0, spec.layout, spec.bevel_deg, rounding=spec.rounding).radii.min())  # thickness / (2 layout[2]), less INSET × rounding; thinner at a bevel's end
+    if smallest >= MIN_SIZE:
+        return None
+    return (f"layout: the clump's smallest sphere would be {smallest:.3g} m in radius; allowed: at least {MIN_SIZE:g} m "
+            f"(fewer spheres across the thickness{', less rounding' if spec.rounding else ''}"
+            f"{', a smaller bevel' if spec.bevel_deg else ''}) (got {list(spec.layout)})")

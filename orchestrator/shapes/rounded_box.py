@@ -19,6 +19,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
+from orchestrator.fields import MIN_SIZE
 from orchestrator.shapes.clump import rounded_box_moments
 
 # Contact points of a flat landing on another such brick, aligned (both vertices and both crossing
@@ -179,3 +180,19 @@ def brick_rounded_box(length: float, width: float, thickness: float, density: fl
     """One shared BrickRoundedBox per set of inputs (cases ask once per body)."""
     return BrickRoundedBox(length, width, thickness, density, float(rounding), mass,
                            None if inertia is None else tuple(float(i) for i in inertia))  # type: ignore[arg-type]
+
+
+def from_spec(spec, density: float) -> BrickRoundedBox:
+    """The rounded box of a shape entry (bodies.BrickShape: length, width, thickness, rounding, mass,
+    inertia) at `density` kg/m³."""
+    return brick_rounded_box(spec.length, spec.width, spec.thickness, density, spec.rounding, spec.mass, spec.inertia)
+
+
+def check_spec(spec) -> str | None:
+    """A rounded box is swept by a sphere: it needs a rounding, and has no bevelled faces."""
+    if spec.bevel_deg:
+        return f"bevel_deg: a rounded_box brick has no bevelled faces; allowed: 0, or kind: clump (got {spec.bevel_deg!r})"
+    if not spec.rounding:
+        limit = min(spec.length, spec.width, spec.thickness) / 2.0
+        return f"rounding: a rounded_box brick is swept by a sphere of this radius; allowed: [{MIN_SIZE:g}, {limit:g}) m (got 0)"
+    return None

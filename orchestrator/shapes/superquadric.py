@@ -191,3 +191,16 @@ def brick_superquadric(length: float, width: float, thickness: float, density: f
     """One shared BrickSuperquadric per set of inputs (cases ask once per body)."""
     return BrickSuperquadric(length, width, thickness, density, tuple(float(n) for n in blockiness),  # type: ignore[arg-type]
                              mass, None if inertia is None else tuple(float(i) for i in inertia), rounding)
+
+
+def from_spec(spec, density: float) -> BrickSuperquadric:
+    """The superquadric of a shape entry (bodies.BrickShape: length, width, thickness, blockiness,
+    rounding, mass, inertia) at `density` kg/m³."""
+    return brick_superquadric(spec.length, spec.width, spec.thickness, density, spec.blockiness, spec.mass, spec.inertia, spec.rounding)
+
+
+def no_bevel(spec) -> str | None:
+    """Only clumps have bevelled faces: a one-line field error for a bevelled entry of this kind."""
+    if spec.bevel_deg:
+        return f"bevel_deg: a {spec.kind} brick has no bevelled faces; allowed: 0, or kind: clump (got {spec.bevel_deg!r})"
+    return None

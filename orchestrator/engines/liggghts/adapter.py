@@ -148,7 +148,7 @@ class LiggghtsAdapter(AdapterDefaults):
         watcher = ThermoWatcher(dt, seal_behind(rundir, total))
         env = dict(os.environ)
         executable = None
-        if superquadrics.is_superquadric_case(case):  # Debian's build has no superquadrics: the source-built one
+        if superquadrics.one_atom_bodies(plan):  # Debian's build has no superquadrics: the source-built one
             executable = str(plugin.ensure_superquadric_liggghts())
         elif case.law is ContactLaw.bilinear:  # the compiled law: load the plugin
             env.update(plugin.liggghts_env(plugin.ensure_plugin()))
@@ -176,7 +176,7 @@ class LiggghtsAdapter(AdapterDefaults):
         deck = rundir / DECK_NAME
         dt = plan.schedule.dt
         if (rundir / DUMP_NAME).exists():
-            columns = list(dump_columns(case))
+            columns = list(dump_columns(plan))
             steps, frames = checkpoint.merge([read_binary_dump(path, len(columns)) for path in checkpoint.segment_files(rundir, DUMP_NAME)])
         else:
             steps, columns, frames = read_dump(rundir / TEXT_DUMP_NAME)
@@ -184,7 +184,7 @@ class LiggghtsAdapter(AdapterDefaults):
             raise EngineError("the engine wrote no dump frames", deck, rundir / LOG_NAME)
         column = {name: i for i, name in enumerate(columns)}
         if "id_multisphere" in column:
-            position, velocity, spin, orientation, atom_slot = clump_states(case, column, frames)
+            position, velocity, spin, orientation, atom_slot = clump_states(plan, column, frames)
             ids = np.arange(1, len(case.bodies.clumps) + 1)
         elif "quat1" in column:  # superquadrics: one atom per body, atom id = body index + 1
             ids = np.arange(1, len(case.bodies.clumps) + 1)
@@ -231,7 +231,7 @@ class LiggghtsAdapter(AdapterDefaults):
         return [(step, path) for step, path in super().usable_checkpoints(plan, rundir) if step not in removals]
 
     def last_frame_step(self, plan: RunPlan, rundir: Path) -> int | None:
-        columns = len(dump_columns(plan.case))
+        columns = len(dump_columns(plan))
         pieces = [binary_dump_steps(path, columns) for path in checkpoint.segment_files(rundir, DUMP_NAME)]
         steps, _ = checkpoint.merge([(piece, piece) for piece in pieces])
         return steps[-1] if steps else None

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator import geometry
-from orchestrator.case import Case, Domain
+from orchestrator.case import Domain
 from orchestrator.engines import common
 from orchestrator.engines.checkpoint import segment_name
 from orchestrator.engines.liggghts import superquadrics
@@ -79,11 +79,9 @@ def primes_above(start: int, count: int) -> list[int]:
     return found
 
 
-def _sphere_radii(case: Case) -> list[float]:
+def _sphere_radii(plan: RunPlan) -> list[float]:
     """The radius of every particle LIGGGHTS meets: spheres, clump spheres, superquadrics' bounding spheres."""
-    radii = [s.radius for s in case.bodies.spheres]
-    radii += [case.shape(c.shape).body(case.material(c.material).density).radius for c in case.bodies.clumps]
-    return radii
+    return [s.radius for s in plan.case.bodies.spheres] + [body.radius for body in plan.shapes]
 
 
 def bin_size(domain: Domain, cutoff: float, max_bins: float = MAX_BINS) -> float | None:
@@ -103,15 +101,17 @@ def _numbers(values: object) -> str:
     return " ".join(repr(float(v)) for v in values)  # type: ignore[union-attr]
 
 
-def clump_context(case: Case, types: dict[str, int]) -> dict[str, object]:
+def clump_context(plan: RunPlan, types: dict[str, int]) -> dict[str, object]:
     """Template data for clumps: multisphere templates per (shape, material, glued) and one insertion per clump."""
-    if not case.bodies.clumps or superquadrics.is_superquadric_case(case):
+    case = plan.case
+    if not case.bodies.clumps or superquadrics.one_atom_bodies(plan):
         return {"clump_templates": [], "clumps": [], "placement_radius": PLACEMENT_RADIUS}
     kinds = sorted({(c.shape, c.material, c.fixed) for c in case.bodies.clumps})
     seeds = primes_above(10000 + case.seed % 100000, 2 * len(kinds) + len(case.bodies.clumps))
+    shape_of = {(c.shape, c.material): body for c, body in zip(case.bodies.clumps, plan.shapes)}
     templates = {}
     for index, (shape_name, material, glued) in enumerate(kinds):
-        brick = case.shape(shape_name).clump(case.material(material).density)
+        brick = shape_of[(shape_name, material)]
         spheres = " ".join(f"{_numbers(c)} {float(r)!r}" for c, r in zip(brick.centres, brick.radii))
         tensor = brick.inertia_tensor
         templates[(shape_name, material, glued)] = {
@@ -208,7 +208,7 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
     direction = gravity / magnitude if magnitude > 0 else np.array([0.0, 0.0, -1.0])
     segments = run_segments(plan, start)
     segment = plan.segment
-    radius_max = float(max(_sphere_radii(case)))
+    radius_max = float(max(_sphere_radii(plan)))
     skin = skin_radii * radius_max
     context = {
         "name": case.name,
@@ -232,7 +232,7 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
         "gravity_direction": [float(v) for v in direction],
         "walls": walls,
         "planar": case.planar,
-        **body_context(case, types, starts_from_state=bool(resume or case.initial_state)),
+        **body_context(plan, types, starts_from_state=bool(resume or case.initial_state)),
         "output_every": plan.schedule.output_every,
         "thermo_every": max(1, min(plan.schedule.output_every, plan.schedule.total_steps // 100)),
         "total_steps": plan.schedule.total_steps,
@@ -248,10 +248,11 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
     return deck
 
 
-def body_context(case: Case, types: dict[str, int], starts_from_state: bool) -> dict[str, object]:
+def body_context(plan: RunPlan, types: dict[str, int], starts_from_state: bool) -> dict[str, object]:
     """Template data for the bodies: atom style, dump columns, glued and non-rotating ids, clump
     templates or superquadric settings (none when the bodies come from a state file)."""
-    superquadric = superquadrics.is_superquadric_case(case)
+    case = plan.case
+    superquadric = superquadrics.one_atom_bodies(plan)
     if superquadric:
         glued = [i + 1 for i, c in enumerate(case.bodies.clumps) if c.fixed]
         fixed = []
@@ -259,24 +260,24 @@ def body_context(case: Case, types: dict[str, int], starts_from_state: bool) -> 
         glued = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed]
         fixed = [i + 1 for i, s in enumerate(case.bodies.spheres) if s.fixed_rotation and not s.fixed]
     return {
-        "dump_columns": " ".join(dump_columns(case)),
+        "dump_columns": " ".join(dump_columns(plan)),
         "atom_style": "superquadric" if superquadric else "granular",
         "surface": " surface superquadric" if superquadric else "",  # pair_style gran's superquadric surface
         "superquadric": superquadric,
         # rounded boxes: pair_style roundedbox and fix wall/roundedbox (custom_contact/) at this rounding
-        "rounding": superquadrics.rounding(case) if superquadric else None,
-        "superquadric_sets": superquadrics.set_commands(case) if superquadric and not starts_from_state else [],
+        "rounding": superquadrics.rounding(plan) if superquadric else None,
+        "superquadric_sets": superquadrics.set_commands(plan) if superquadric and not starts_from_state else [],
         "fixed_rotation_ids": id_ranges(fixed) if fixed else "",
         "glued_ids": id_ranges(glued) if glued else "",
-        **clump_context(case, types),
+        **clump_context(plan, types),
     }
 
 
-def dump_columns(case: Case) -> tuple[str, ...]:
+def dump_columns(plan: RunPlan) -> tuple[str, ...]:
     """The frame dump's columns: per sphere, per clump sphere (with its body id) or per superquadric (with its orientation)."""
-    if superquadrics.is_superquadric_case(case):
+    if superquadrics.one_atom_bodies(plan):
         return superquadrics.SUPERQUADRIC_COLUMNS
-    return CLUMP_COLUMNS if case.bodies.clumps else SPHERE_COLUMNS
+    return CLUMP_COLUMNS if plan.case.bodies.clumps else SPHERE_COLUMNS
 
 
 def write_meshes(plan: RunPlan, types: dict[str, int], rundir: Path, present: list[str]) -> list[dict[str, object]]:
@@ -297,7 +298,7 @@ def write_data(plan: RunPlan, types: dict[str, int], path: Path) -> None:
     or, for superquadric bodies, their rows (superquadrics.atom_rows)."""
     case = plan.case
     lower, upper = plan.domain.lower, plan.domain.upper
-    superquadric = superquadrics.is_superquadric_case(case)
+    superquadric = superquadrics.one_atom_bodies(plan)
     lines = [
         f"LIGGGHTS data file written by dem-orchestrator for case {case.name}",
         "",
@@ -309,7 +310,7 @@ def write_data(plan: RunPlan, types: dict[str, int], path: Path) -> None:
         f"{lower[2]!r} {upper[2]!r} zlo zhi",
     ]
     if superquadric:
-        lines += ["", "Atoms", "", *superquadrics.atom_rows(case, types), "", "Velocities", "", *superquadrics.velocity_rows(case)]
+        lines += ["", "Atoms", "", *superquadrics.atom_rows(plan, types), "", "Velocities", "", *superquadrics.velocity_rows(case)]
         path.write_text("\n".join(lines) + "\n")
         return
     if not case.bodies.spheres:  # clumps only: they are inserted by the deck

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.shapes.clump import quaternion_matrices
-from orchestrator.case import Case
+from orchestrator.plan import RunPlan
 
 
 def atom_columns(ids: np.ndarray, frames: list[np.ndarray], first: list[int], widths: list[int]) -> list[np.ndarray]:
@@ -36,7 +36,7 @@ def superquadric_states(ids: np.ndarray, column: dict[str, int], frames: list[np
     return position, velocity, spin, orientation
 
 
-def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def clump_states(plan: RunPlan, column: dict[str, int], frames: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Body states from the per-sphere dump of multisphere clumps, all bodies of a frame at once:
     position, velocity, spin, orientation, and atom id → body index (the clump's place in the case).
 
@@ -48,8 +48,8 @@ def clump_states(case: Case, column: dict[str, int], frames: list[np.ndarray]) -
     """
     from scipy.spatial import cKDTree
 
-    clumps = case.bodies.clumps
-    templates = [case.shape(c.shape).clump(case.material(c.material).density).centres for c in clumps]
+    clumps = plan.case.bodies.clumps
+    templates = [body.centres for body in plan.shapes]  # type: ignore[attr-defined]
     template_means, sizes = np.array([t.mean(axis=0) for t in templates]), np.array([len(t) for t in templates])
     shape = (len(frames), len(clumps))
     position, velocity, spin = (np.full(shape + (3,), np.nan) for _ in range(3))

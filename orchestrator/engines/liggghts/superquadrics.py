@@ -14,6 +14,7 @@ inertia, since LIGGGHTS turns the spin into an angular momentum with both).
 from __future__ import annotations
 
 from orchestrator.case import Case
+from orchestrator.plan import RunPlan
 from orchestrator.shapes import BodyShape
 
 # Dump columns of a superquadric run: quat1..4 are the orientation (w, x, y, z).
@@ -28,16 +29,16 @@ ONE_ATOM_KINDS = ("superquadric", "rounded_box")
 ROUNDED_BOX_BLOCKINESS = (12.0, 12.0)
 
 
-def is_superquadric_case(case: Case) -> bool:
-    """Whether the case's bodies are one atom each (superquadrics or rounded boxes)."""
-    return any(case.shape(c.shape).kind in ONE_ATOM_KINDS for c in case.bodies.clumps)
+def one_atom_bodies(plan: RunPlan) -> bool:
+    """Whether the plan's bodies are one atom each (superquadrics or rounded boxes)."""
+    return any(body.kind in ONE_ATOM_KINDS for body in plan.shapes)
 
 
-def rounding(case: Case) -> float | None:
-    """The rounding radius (m) of a case of rounded boxes (pair_style roundedbox takes one), else None.
+def rounding(plan: RunPlan) -> float | None:
+    """The rounding radius (m) of a run of rounded boxes (pair_style roundedbox takes one), else None.
 
     Raises ValueError naming the shapes when their roundings differ."""
-    values = {float(case.shape(c.shape).rounding) for c in case.bodies.clumps if case.shape(c.shape).kind == "rounded_box"}
+    values = {float(body.rounding) for body in plan.shapes if body.kind == "rounded_box"}  # type: ignore[attr-defined]
     if len(values) > 1:
         raise ValueError(f"shapes.rounding: LIGGGHTS takes one rounding for all rounded_box bodies of a case; got {sorted(values)}")
     return values.pop() if values else None
@@ -53,14 +54,10 @@ def _data_shape(body: BodyShape) -> tuple[tuple[float, float, float], tuple[floa
     return (a, b, c), (float(n1), float(n2)), body.engine_density  # type: ignore[attr-defined]
 
 
-def bodies(case: Case) -> list[BodyShape]:
-    return [case.shape(c.shape).body(case.material(c.material).density) for c in case.bodies.clumps]
-
-
-def atom_rows(case: Case, types: dict[str, int]) -> list[str]:
+def atom_rows(plan: RunPlan, types: dict[str, int]) -> list[str]:
     """Atoms rows `id type density a b c n1 n2 x y z`, one per body in case order (atom id = body index + 1)."""
     rows = []
-    for i, (c, body) in enumerate(zip(case.bodies.clumps, bodies(case)), start=1):
+    for i, (c, body) in enumerate(zip(plan.case.bodies.clumps, plan.shapes), start=1):
         (a, b, h), (n1, n2), density = _data_shape(body)
         x, y, z = c.position
         rows.append(f"{i} {types[c.material]} {density!r} {a!r} {b!r} {h!r} {n1!r} {n2!r} {x!r} {y!r} {z!r}")
@@ -72,10 +69,10 @@ def velocity_rows(case: Case) -> list[str]:
     return [f"{i} {' '.join(repr(float(v)) for v in c.velocity)} 0.0 0.0 0.0" for i, c in enumerate(case.bodies.clumps, start=1)]
 
 
-def set_commands(case: Case) -> list[str]:
+def set_commands(plan: RunPlan) -> list[str]:
     """One `set atom` per body: true mass and principal moments, orientation (w, x, y, z), spin."""
     commands = []
-    for i, (c, body) in enumerate(zip(case.bodies.clumps, bodies(case)), start=1):
+    for i, (c, body) in enumerate(zip(plan.case.bodies.clumps, plan.shapes), start=1):
         ix, iy, iz = (float(v) for v in body.principal_inertia)
         w, x, y, z = (float(v) for v in c.orientation)
         spin = " ".join(f"omega{axis} {float(v)!r}" for axis, v in zip("xyz", c.angular_velocity))

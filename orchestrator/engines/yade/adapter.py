@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from orchestrator.shapes.clump import world_sphere_centres
-from orchestrator.case import Case, ContactLaw, RectangleWall, Sphere, Wall
+from orchestrator.case import ContactLaw, RectangleWall, Sphere, Wall
 from orchestrator.results import Contacts, Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.checkpoint import segment_name
@@ -62,7 +62,7 @@ class YadeAdapter(AdapterDefaults):
         return EngineInfo(name=self.name, executable=path, version=version, install_hint=INSTALL_HINT)
 
     def warnings(self, plan: RunPlan) -> tuple[str, ...]:
-        _, warning = stand_in_scale(plan.case)
+        _, warning = stand_in_scale(plan)
         return (warning,) if warning else ()
 
     def write_input(self, plan: RunPlan, rundir: Path) -> Path:
@@ -72,7 +72,7 @@ class YadeAdapter(AdapterDefaults):
         # YADE has no bilinear law (no headers to compile one against): it runs the linear
         # spring-dashpot with the same loading stiffness and restitution (the plan's pairs carry it;
         # docs/engines.md), scaled for clumps that land on several spheres at once.
-        scale, _ = stand_in_scale(case)
+        scale, _ = stand_in_scale(plan)
         pairs = [replace(p, cn=p.cn * scale) if p.law is ContactLaw.bilinear else p for p in plan.pairs]
         as_boxes = [rectangle_box(wall) for wall in case.walls]
         boxes = [box for box in as_boxes if box is not None]
@@ -107,7 +107,7 @@ class YadeAdapter(AdapterDefaults):
             "materials": materials + clones,
             "friction": friction,
             "spheres": spheres,
-            "clumps": _clumps(case),
+            "clumps": _clumps(plan),
             "facets": facets,
             "boxes": boxes,
             "removals": _removals(plan),
@@ -140,12 +140,11 @@ class YadeAdapter(AdapterDefaults):
         return common.last_stream_step(rundir, FRAMES_NAME, plan.schedule.dt)
 
 
-def _clumps(case: Case) -> list[tuple]:
+def _clumps(plan: RunPlan) -> list[tuple]:
     """The script's CLUMPS rows: material, sphere centres (world) and radii, centre, orientation,
     velocity, spin, true mass and principal inertia, glued."""
     rows = []
-    for c in case.bodies.clumps:
-        brick = case.shape(c.shape).clump(case.material(c.material).density)
+    for c, brick in zip(plan.case.bodies.clumps, plan.shapes):
         centres = world_sphere_centres(brick, np.asarray(c.position), np.asarray(c.orientation))
         rows.append((c.material, [tuple(float(v) for v in p) for p in centres], [float(r) for r in brick.radii], c.position, c.orientation,
                      c.velocity, c.angular_velocity, brick.mass, tuple(float(i) for i in brick.principal_inertia), c.fixed))

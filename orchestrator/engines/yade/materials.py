@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 
+from orchestrator.plan import RunPlan
 from orchestrator.case import Case, CaseError, ContactLaw
 from orchestrator.physics import MIN_LINEAR_EN2, PairConstants, clipped_restitution, linear_damping, reference_masses
 
@@ -161,14 +162,14 @@ def glued_friction(friction: list[tuple[str, str, float]], clones: list[str]) ->
     return added
 
 
-def stand_in_scale(case: Case) -> tuple[float, str | None]:
+def stand_in_scale(plan: RunPlan) -> tuple[float, str | None]:
     """(factor on every dashpot of the bilinear stand-in, warning or None): 1/√N when every body is a
     clump whose flat landing touches with N spheres; 1 with a warning when clumps of different N, or
     clumps and spheres, share the case (one factor cannot serve them all)."""
+    case = plan.case
     if case.law is not ContactLaw.bilinear or not case.bodies.clumps:
         return 1.0, None
-    kinds = {(c.shape, c.material) for c in case.bodies.clumps}
-    counts = {case.shape(shape).clump(case.material(material).density).face_contacts for shape, material in kinds}
+    counts = {body.face_contacts for body in plan.shapes}
     if len(counts) == 1 and not case.bodies.spheres:
         return 1.0 / math.sqrt(counts.pop()), None
     return 1.0, ("YADE's dashpot stand-in of the bilinear law is not calibrated for these clumps (several face-contact counts, "

@@ -12,7 +12,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from orchestrator.bodies import MIN_SIZE, BrickShape, ShapeKind
+from orchestrator.bodies import MIN_SIZE, Brick, BrickShape, ShapeKind
 from orchestrator.case import Name, Real, RestStop, Strict
 from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
 from orchestrator.shapes import BodyShape
@@ -45,34 +45,26 @@ class GeometrySpec(Strict):
         return AvalancheGeometry(**self.model_dump())
 
 
-class BrickSpec(Strict):
+class BrickSpec(Brick):
+    """A study's brick: the one brick schema (bodies.Brick) at the 2012 study's brick by default, with
+    its density; `kind` unset is the engine's preferred kind (AvalancheStudy.brick_spec), a clump when
+    bevelled (docs/bricks.md, "Kinds of brick")."""
+
+    kind: ShapeKind | None = None
     length: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.031
     width: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.015
     thickness: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.008
-    density: Real(unit="kg/m³", gt=0.0, le=1e5) = 1700.0
-    layout: tuple[int, int, int] = (4, 2, 1)
     bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see shapes/clump.py)
     # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
     # join the layout, and the brick gets the rounded solid's mass and inertia (shapes/clump.py). With them
     # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
     # (required with a bevel).
     rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
-    # How the brick is realised (docs/bricks.md, "Kinds of brick"): `clump` (the layout above plus
-    # corner spheres) or `superquadric` (LIGGGHTS: one body with flat faces, this blockiness).
-    # Unset: the engine's preferred kind (AvalancheStudy.brick_spec), a clump when bevelled.
-    kind: ShapeKind | None = None
-    blockiness: tuple[Real(unit="1", ge=2.0, le=40.0), Real(unit="1", ge=2.0, le=40.0)] = (6.0, 6.0)
-
-    @model_validator(mode="after")
-    def _rounding_needs_a_box(self) -> "BrickSpec":
-        if self.rounding and self.bevel_deg:
-            raise ValueError(f"rounding: a bevelled brick has no corner spheres; allowed: 0 with bevel_deg > 0 (got {self.rounding!r})")
-        return self
+    density: Real(unit="kg/m³", gt=0.0, le=1e5) = 1700.0
 
     def shape_entry(self, name: str = "brick") -> dict[str, object]:
         """The case's `shapes` entry of this brick (a clump when `kind` is unset)."""
-        return {"name": name, "kind": self.kind or "clump", "length": self.length, "width": self.width, "thickness": self.thickness,
-                "layout": list(self.layout), "bevel_deg": self.bevel_deg, "rounding": self.rounding, "blockiness": list(self.blockiness)}
+        return self.entry(name)
 
     def build(self) -> BodyShape:
         return BrickShape(**self.shape_entry()).body(self.density)
