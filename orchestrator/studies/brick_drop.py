@@ -52,7 +52,8 @@ def study_brick(layout: tuple[int, int, int] | None = None, rounding: float | No
     """A shape entry for the study's brick (31 × 15 × 8 mm) as the brick studies build it by default
     (BrickSpec: its layout and rounding unless given), with the mass and inertia of the study's
     rounded brick (density 1700 kg/m³ × V, and I/m of the reference) whatever its representation
-    (`kind`: clump or superquadric, with `blockiness`)."""
+    (`kind`: any kind of orchestrator/shapes; `blockiness` for a superquadric). The entry is not
+    validated here: the case made of it is."""
     ref = reference()
     given = {"layout": layout, "rounding": rounding, "blockiness": blockiness}
     # not validated here: the case made of the entry is (a test may build a brick out of range on purpose)

@@ -18,11 +18,18 @@ import numpy as np
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case
+from orchestrator.studies.reference import load_reference
 
 G = 9.81
 PLACEMENTS = ("aligned", "aligned_y", "offset_x_3.9mm", "yaw_90deg", "yaw_30deg")
 CONSTANTS = {"law": "bilinear", "en2": 0.13, "mu": 0.86, "kn": 1e5, "kt_over_kn": 0.27}
 ACCELERATION_WINDOW = (0.01, 0.05)  # s: steady sliding at 47°, before the upper brick tips off the lower one's edge
+
+
+def reference() -> dict[str, Any]:
+    """[brick_pair.richefeu_code] of reference.toml: placements, onsets, contacts at rest, the slide
+    after 0.4 s against the tilt (slide_mm, one row per placement) and the sliding accelerations."""
+    return load_reference()["brick_pair"]["richefeu_code"]
 
 
 def pair_case(engine: str, shape: dict[str, Any], placement: str, angle_deg: float, duration: float = 0.4) -> Case:
