@@ -188,6 +188,13 @@ def measure_drop(engine: str, shape: dict[str, Any], constants: str, tilted: boo
     return (tilted_metrics(drop) if tilted else flat_metrics(drop)), drop
 
 
+def first_rebound_ratio(trajectory: Trajectory, body: BodyShape) -> float:
+    """v_out / v_in of the first impact of a drop's results (drop_case) of a brick of shape `body`
+    (its lowest point tells the contacts); NaN when there was none."""
+    ratios = Drop.from_trajectory(trajectory, body).rebound_ratios(1)
+    return ratios[0] if ratios else math.nan
+
+
 def run_drop(engine: str, shape: dict[str, Any], constants: str, tilted: bool, directory: Path) -> dict[str, Any]:
     """Run one drop in `directory` and return its metrics (flat_metrics or tilted_metrics)."""
     return measure_drop(engine, shape, constants, tilted, directory)[0]
