@@ -8,8 +8,8 @@ put on the brick/plate pair):
   after the first;
 - tilted: released at rest at z = 0.100 m, turned by Ry(10°)·Rx(20°). Measured: the apex of the
   centre in the main rebound and its time, the second landing, the horizontal travel at 0.27 s
-  (set A; the study's code is not step-robust after that), the time at rest, the travel and
-  whether the brick lies flat (set B).
+  (set A; the study's code is not step-robust after that), the time at rest, the travel,
+  whether the brick lies flat and how far its corners rest from the study brick's (set B).
 
 Events come from the pose alone: a body touches the plate while the lowest point of its spheres is
 below the plate (their overlap), so every representation of the brick is measured alike. Frames
@@ -183,9 +183,17 @@ def measure_drop(engine: str, shape: dict[str, Any], constants: str, tilted: boo
     """Run one drop in `directory`: its metrics (flat_metrics or tilted_metrics) and its Drop."""
     case = drop_case(engine, shape, constants, tilted)
     run_case(case, directory, directory / RELEASE_DIR)
-    body = case.shape(shape["name"]).body(case.material("brick").density)
-    drop = Drop.from_trajectory(read_results(directory / RELEASE_DIR / RESULTS), body)
-    return (tilted_metrics(drop) if tilted else flat_metrics(drop)), drop
+    brick = case.shape(shape["name"])
+    drop = Drop.from_trajectory(read_results(directory / RELEASE_DIR / RESULTS), brick.body(case.material("brick").density))
+    if not tilted:
+        return flat_metrics(drop), drop
+    metrics = tilted_metrics(drop)
+    rest = drop.rest_frame()
+    if constants == "B" and rest is not None:  # the study's brick at rest: its centre and yaw (reference.toml)
+        at_rest = reference()["tilted"]
+        half = 0.5 * np.array([brick.length, brick.width, brick.thickness])
+        metrics["rest_corner_error"] = drop.corner_error(rest, half, np.array(at_rest["B_rest_centre"]), at_rest["B_rest_yaw_deg"])
+    return metrics, drop
 
 
 def first_rebound_ratio(trajectory: Trajectory, body: BodyShape) -> float:

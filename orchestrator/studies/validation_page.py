@@ -29,6 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from orchestrator.figures import subplots
+from orchestrator.capabilities import capabilities
 from orchestrator.studies import brick_drop
 from orchestrator.studies.collapse.record import render_section
 
@@ -86,16 +87,21 @@ CHECKS = (
     DropCheck("tilted A: second landing", "tilted_A", _at("second_landing", scale=1e3), lambda r: 1e3 * r["tilted"]["A_second_landing"], 5.0, False, "ms"),
     DropCheck("tilted B: at rest", "tilted_B", _at("rest_time", scale=1e3), lambda r: 1e3 * r["tilted"]["B_rest_time"], 30.0, False, "ms"),
     DropCheck("tilted B: horizontal travel", "tilted_B", _at("rest_travel", scale=1e3), lambda r: 1e3 * r["tilted"]["B_horizontal_travel"], 3.0, False, "mm"),
+    DropCheck("tilted B: resting corners, mean distance to the study brick's", "tilted_B", _at("rest_corner_error", scale=1e3),
+              lambda r: 0.0, 1.0, False, "mm"),
 )
+ROUNDED_BOX = "rounded box"  # the drops' column of an engine's rounded box: "ENGINE, rounded box"
 
 
 # -- recording --------------------------------------------------------------------------------
-def record_drops(engine: str, workdir: Path) -> dict[str, Any]:
-    """The four drops on one engine: {"flat_A": {"metrics": …, "time": […], "lowest": […], "centre_z": […]}, …}."""
+def record_drops(engine: str, workdir: Path, kind: str = "clump") -> dict[str, Any]:
+    """The four drops on one engine, of the study's brick as `kind` (the drop studies' rounded clump
+    by default): {"flat_A": {"metrics": …, "time": […], "lowest": […], "centre_z": […]}, …}."""
     found: dict[str, Any] = {}
     for pose, constants in DROPS:
         key = f"{pose}_{constants}"
-        metrics, drop = brick_drop.measure_drop(engine, brick_drop.study_brick(), constants, pose == "tilted", workdir / engine / key)
+        metrics, drop = brick_drop.measure_drop(engine, brick_drop.study_brick(kind=kind), constants, pose == "tilted",
+                                                workdir / engine / kind / key)
         every = slice(None, None, CURVE_EVERY)
         found[key] = {"metrics": _plain(metrics), "time": _rounded(drop.time[every], 4),
                       "lowest": _rounded(drop.lowest[every], 6), "centre_z": _rounded(drop.centre[every, 2], 6)}
@@ -125,6 +131,9 @@ def record_runs(engines: dict[str, str], workdir: Path, demo: bool = False,
     for engine in engines:
         progress(f"{engine}: single-brick drops")
         record["drops"][engine] = record_drops(engine, workdir)
+        if "rounded_box" in capabilities(engine).shape_kinds:
+            progress(f"{engine}: single-brick drops of the rounded box")
+            record["drops"][f"{engine}, {ROUNDED_BOX}"] = record_drops(engine, workdir, "rounded_box")
         if demo:
             progress(f"{engine}: demo avalanche, seeds {', '.join(map(str, DEMO_SEEDS))}")
             record["demo"][engine] = record_demo(engine, workdir)
@@ -173,7 +182,7 @@ def demo_reference() -> dict[str, list[float]]:
 def render_page(record: dict[str, Any], figures: Path, figures_link: str = "validation") -> str:
     """The Markdown page of a record; its figures are written into `figures` (linked as
     `figures_link`/NAME from the page)."""
-    engines = list(record["versions"])
+    columns = list(record["drops"])  # each engine's default brick, then its rounded box where it has one
     reference = brick_drop.reference()
     lines = ["# Validation", "",
              f"Measured with `demorch validation` on {_measured(record)}"
@@ -186,17 +195,19 @@ def render_page(record: dict[str, Any], figures: Path, figures_link: str = "vali
               "Table 1; set B: the brick/brick constants put on the brick/plate pair. Flat: released at rest at "
               "z = 50 mm, largest face down; tilted: at z = 100 mm, turned by Ry(10°)·Rx(20°). The tolerances are "
               "those the compiled law must meet (LIGGGHTS); YADE runs the law as a calibrated dashpot, tuned for a "
-              "flat landing (four corners at once), and is shown against the same tolerances.", ""]
-    lines += ["| quantity | study's code | tolerance | " + " | ".join(engines) + " |", "|---|---|---|" + "---|" * len(engines)]
+              "flat landing (four corners at once), and is shown against the same tolerances. Columns named "
+              f"“ENGINE, {ROUNDED_BOX}” drop the study's brick as its code models it (`kind: rounded_box`, "
+              "[Bricks](bricks.md#the-rounded-box-the-studys-brick-as-the-study-models-it)).", ""]
+    lines += ["| quantity | study's code | tolerance | " + " | ".join(columns) + " |", "|---|---|---|" + "---|" * len(columns)]
     for check in CHECKS:
         expected = check.expected(reference)
         cells = []
-        for engine in engines:
+        for engine in columns:
             drops = record["drops"].get(engine, {})
             value = check.measured(drops[check.drop]["metrics"]) if check.drop in drops else math.nan
             cells.append("—" if not math.isfinite(value) else f"{value:.4g} {'✓' if check.passes(value, expected) else '✗'}")
         lines.append(f"| {check.label}{f' ({check.unit})' if check.unit else ''} | {expected:.4g} | {check.tolerance_text} | " + " | ".join(cells) + " |")
-    flat = {engine: record["drops"][engine]["tilted_B"]["metrics"].get("lying_flat") for engine in engines if engine in record["drops"]}
+    flat = {engine: record["drops"][engine]["tilted_B"]["metrics"].get("lying_flat") for engine in columns}
     lines += ["", "Tilted B comes to rest lying flat (31 × 15 face down) in the study's code; here: "
               + ", ".join(f"{engine} {'yes' if value else 'no'}" for engine, value in flat.items()) + ".", ""]
     figures.mkdir(parents=True, exist_ok=True)
