@@ -110,24 +110,20 @@ inline void edge(const Box &b, int e, Edge &out)
   out.length = 2.0 * b.h[k];
 }
 
-/* The point of the inner box closest to a world point, and their distance (0 inside). */
-inline double closestOnBox(const Box &b, const double *point, double *closest)
-{
-  double u[3], q[3];
-  toLocal(b, point, u);
-  for (int k = 0; k < 3; k++) q[k] = u[k] < -b.h[k] ? -b.h[k] : (u[k] > b.h[k] ? b.h[k] : u[k]);
-  toWorld(b, q, closest);
-  const double d[3] = { u[0] - q[0], u[1] - q[1], u[2] - q[2] };
-  return std::sqrt(dot(d, d));
-}
-
 /* One vertex against the other box. `flip`: the vertex belongs to B (the normal then points from
  * the box that owns the closest point, A, to the vertex, reversed to keep "from B to A"). */
 inline bool vertexAgainstBox(const double *p, double r_vertex, const Box &other, bool flip, int key, SubContact &out)
 {
-  double q[3];
-  const double distance = closestOnBox(other, p, q);
   const double reach = r_vertex + other.r;
+  // in the other box's frame first: most vertices are out of reach, and need no more
+  double u[3], clamped[3];
+  toLocal(other, p, u);
+  for (int k = 0; k < 3; k++) clamped[k] = u[k] < -other.h[k] ? -other.h[k] : (u[k] > other.h[k] ? other.h[k] : u[k]);
+  const double gap[3] = { u[0] - clamped[0], u[1] - clamped[1], u[2] - clamped[2] };
+  if (dot(gap, gap) >= reach * reach) return false;
+  double q[3];
+  toWorld(other, clamped, q);
+  const double distance = std::sqrt(dot(gap, gap));
   if (distance >= reach || distance <= 1e-12 * reach) return false;  // apart, or inner boxes interpenetrating
   const double sign = flip ? -1.0 : 1.0;
   out.key = key;
@@ -160,17 +156,18 @@ inline bool edgeAgainstEdge(const Box &A, const Edge &ea, const Box &B, const Ed
 {
   const double *a0 = ea.start, *da = ea.direction, *b0 = eb.start, *db = eb.direction;
   const double la = ea.length, lb = eb.length;
-  double n[3];
-  cross(da, db, n);
-  const double sine = std::sqrt(dot(n, n));
-  if (sine < 1e-6) return false;  // parallel: their ends' vertex contacts carry them
   const double w0[3] = { a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2] };
   const double cosine = dot(da, db), d = dot(da, w0), e = dot(db, w0);
   const double denominator = 1.0 - cosine * cosine;
+  if (denominator < 1e-13) return false;  // parallel (the test below, sine < 1e-6, decides near it)
   const double s = (cosine * e - d) / denominator;  // along A's edge from its start (m)
   const double t = (e - cosine * d) / denominator;  // along B's edge
   // within both segments; a crossing at an end, to 1e-6 of the length, counts (aligned bricks)
   if (s < -1e-6 * la || s > la * (1.0 + 1e-6) || t < -1e-6 * lb || t > lb * (1.0 + 1e-6)) return false;
+  double n[3];
+  cross(da, db, n);
+  const double sine = std::sqrt(dot(n, n));
+  if (sine < 1e-6) return false;  // parallel: their ends' vertex contacts carry them
   for (int i = 0; i < 3; i++) n[i] /= sine;
   double pa[3], pb[3];
   for (int i = 0; i < 3; i++) { pa[i] = a0[i] + s * da[i]; pb[i] = b0[i] + t * db[i]; }
@@ -227,14 +224,20 @@ inline bool outerBoxesApart(const Box &A, const Box &B)
   return false;
 }
 
-/* Whether an edge may come within `reach` of a box's inner box: its middle within half its length
- * and `reach` of the box (a cheap cull before the edge pairs). */
+/* Whether an edge may come within `reach` of a box's inner box: the box around the edge's two ends,
+ * in that box's frame, meets the inner box grown by `reach` (a cheap cull before the edge pairs: an
+ * edge lying above a face on the far side of its own box is out). */
 inline bool edgeNearBox(const Edge &e, const Box &b, double reach)
 {
-  double middle[3], closest[3];
-  for (int k = 0; k < 3; k++) middle[k] = e.start[k] + 0.5 * e.length * e.direction[k];
-  const double limit = 0.5 * e.length + reach;
-  return closestOnBox(b, middle, closest) < limit;
+  double end[3], u0[3], u1[3];
+  for (int k = 0; k < 3; k++) end[k] = e.start[k] + e.length * e.direction[k];
+  toLocal(b, e.start, u0);
+  toLocal(b, end, u1);
+  for (int k = 0; k < 3; k++) {
+    const double limit = b.h[k] + reach;
+    if ((u0[k] > limit && u1[k] > limit) || (u0[k] < -limit && u1[k] < -limit)) return false;
+  }
+  return true;
 }
 
 /* Every sub-contact between two rounded boxes (A first: callers put the lower atom tag as A, so the
