@@ -19,7 +19,10 @@ without a simulation:
 - brick on brick (the engine's preferred brick on a glued one, gravity tilted): at 40.2°, half a
   degree below the friction angle atan 0.86, the upper brick slides at most 1 mm in 0.4 s in each of
   the five placements of the 2012 study's own runs; at 47° it slides at g (sin θ − 0.86 cos θ)
-  within 2 % (reference.toml [brick_pair.richefeu_code]).
+  within 2 % (reference.toml [brick_pair.richefeu_code]);
+- the same brick-on-brick cases for the rounded box (the study's brick as its code models it) on
+  every engine that takes that kind, and its flat drop A: first rebound ratio within 0.5 % of the
+  study's code's (reference.toml [brick_drop.richefeu_code.flat]).
 
 KNOWN_GAPS holds the cases an engine is known to miss, with the value measured; the parity tests
 expect them to fail (strictly: a fix shows as an unexpected pass) and `demorch parity` marks them.
