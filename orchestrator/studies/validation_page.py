@@ -229,7 +229,7 @@ def _demo_section(record: dict[str, Any], figures: Path, figures_link: str) -> l
     seeds = sorted({run["seed"] for engine in engines for run in record["demo"][engine]})
     lines = ["## The demo avalanche against the study's code", "",
              f"The demo (`cases/avalanche/small.yaml`: 96 bricks, 0.4 m down the 45° slope) with seeds "
-             f"{', '.join(map(str, seeds))} on each engine with its preferred brick ([Bricks](bricks.md#kinds-of-brick-clump-or-superquadric)), "
+             f"{', '.join(map(str, seeds))} on each engine with its preferred brick ([Bricks](bricks.md#kinds-of-brick-clump-superquadric-or-rounded-box)), "
              f"beside the demo's packing run {reference['runs']} times with "
              "the 2012 study's own code (tiny perturbations). Ranges are lowest–highest over the runs; ✓: the engine's "
              "range overlaps the study code's.", "",
