@@ -20,7 +20,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from orchestrator.fields import MIN_SIZE
-from orchestrator.shapes.clump import rounded_box_moments
+from orchestrator.shapes.solid import OneBodyBrick
 
 # Contact points of a flat landing on another such brick, aligned (both vertices and both crossing
 # edge pairs at each corner): what the stiffest contact, and so the time step, is sized by.
@@ -28,7 +28,7 @@ FACE_CONTACTS = 16
 
 
 @dataclass(frozen=True)
-class BrickRoundedBox:
+class BrickRoundedBox(OneBodyBrick):
     length: float
     width: float
     thickness: float
@@ -40,44 +40,9 @@ class BrickRoundedBox:
     kind = "rounded_box"
 
     @property
-    def half_axes(self) -> np.ndarray:
-        """(3,) outer half extents (m) along the length, width and thickness."""
-        return np.array([self.length, self.width, self.thickness]) / 2.0
-
-    @property
     def inner_half_extents(self) -> np.ndarray:
         """(3,) half extents (m) of the inner box: the outer ones less the rounding."""
         return self.half_axes - self.rounding
-
-    @cached_property
-    def _moments(self) -> tuple[float, np.ndarray]:
-        volume, _, covariance = rounded_box_moments(2.0 * self.half_axes, self.rounding)
-        return volume, np.diag(covariance)
-
-    @property
-    def volume(self) -> float:
-        return self._moments[0]
-
-    @property
-    def mass(self) -> float:
-        return self.mass_given if self.mass_given is not None else self.density * self.volume
-
-    @cached_property
-    def inertia_tensor(self) -> np.ndarray:
-        """(3, 3) inertia about the centre of mass in the brick axes (diagonal), kg m²."""
-        if self.inertia_given is not None:
-            return np.diag(np.asarray(self.inertia_given, dtype=float))
-        second = self._moments[1]
-        density = self.mass / self.volume
-        return density * np.diag([second[1] + second[2], second[0] + second[2], second[0] + second[1]])
-
-    @property
-    def principal_inertia(self) -> np.ndarray:
-        return np.diag(self.inertia_tensor).copy()
-
-    @property
-    def centroid_offset(self) -> np.ndarray:
-        return np.zeros(3)
 
     @property
     def extent(self) -> np.ndarray:
@@ -87,14 +52,6 @@ class BrickRoundedBox:
     def bounding_radius(self) -> float:
         """|h| + r (m): a corner's sphere is the farthest surface."""
         return float(np.linalg.norm(self.inner_half_extents) + self.rounding)
-
-    @property
-    def radius(self) -> float:
-        return self.bounding_radius
-
-    @property
-    def particles(self) -> int:
-        return 1
 
     @property
     def face_contacts(self) -> int:

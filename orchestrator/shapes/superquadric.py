@@ -23,11 +23,11 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.special import beta
 
-from orchestrator.shapes.clump import rounded_box_moments
+from orchestrator.shapes.solid import OneBodyBrick
 
 
 @dataclass(frozen=True)
-class BrickSuperquadric:
+class BrickSuperquadric(OneBodyBrick):
     length: float
     width: float
     thickness: float
@@ -40,21 +40,6 @@ class BrickSuperquadric:
     kind = "superquadric"
 
     @property
-    def half_axes(self) -> np.ndarray:
-        """(3,) semi-axes a, b, c (m) along the length, width and thickness."""
-        return np.array([self.length, self.width, self.thickness]) / 2.0
-
-    @cached_property
-    def _moments(self) -> tuple[float, np.ndarray]:
-        volume, _, covariance = rounded_box_moments(np.array([self.length, self.width, self.thickness]), self.rounding)
-        return volume, np.diag(covariance)
-
-    @property
-    def volume(self) -> float:
-        """The true brick's volume (m³), which sets its mass at the material's density."""
-        return self._moments[0]
-
-    @property
     def superquadric_volume(self) -> float:
         """The superquadric's own volume (m³): 2 a b c ε1 ε2 B(ε1/2 + 1, ε1) B(ε2/2, ε2/2), ε = 2/n
         (Jaklič, Leonardis & Solina 2000, eq. 2.60)."""
@@ -63,30 +48,9 @@ class BrickSuperquadric:
         return float(2.0 * a * b * c * e1 * e2 * beta(e1 / 2.0 + 1.0, e1) * beta(e2 / 2.0, e2 / 2.0))
 
     @property
-    def mass(self) -> float:
-        return self.mass_given if self.mass_given is not None else self.density * self.volume
-
-    @property
     def engine_density(self) -> float:
         """The density (kg/m³) that gives the superquadric's own volume the brick's mass."""
         return self.mass / self.superquadric_volume
-
-    @cached_property
-    def inertia_tensor(self) -> np.ndarray:
-        """(3, 3) inertia about the centre of mass in the brick axes (diagonal), kg m²."""
-        if self.inertia_given is not None:
-            return np.diag(np.asarray(self.inertia_given, dtype=float))
-        second = self._moments[1]
-        density = self.mass / self.volume
-        return density * np.diag([second[1] + second[2], second[0] + second[2], second[0] + second[1]])
-
-    @property
-    def principal_inertia(self) -> np.ndarray:
-        return np.diag(self.inertia_tensor).copy()
-
-    @property
-    def centroid_offset(self) -> np.ndarray:
-        return np.zeros(3)
 
     @cached_property
     def extent(self) -> np.ndarray:
@@ -98,16 +62,6 @@ class BrickSuperquadric:
         """Largest distance (m) from the centre to the surface (sampled finely: within 1e-6 of it)."""
         vertices, _ = self.surface_mesh(96)
         return float(np.linalg.norm(vertices, axis=1).max())
-
-    @property
-    def radius(self) -> float:
-        """What neighbour skins are sized by: the bounding radius (one body, one particle)."""
-        return self.bounding_radius
-
-    @property
-    def particles(self) -> int:
-        """Particles the engine moves for this body: one."""
-        return 1
 
     @property
     def face_contacts(self) -> int:
