@@ -32,6 +32,7 @@ class Capabilities:
     contact_output: records every contact at each frame (`record_contacts`: results.h5 /contacts),
         except between bodies of the `unrecorded_kinds`.
     bilinear_only_kinds: kinds whose bodies it makes touch by the bilinear law only.
+    one_rounding_kinds: kinds whose bodies must all share one `rounding` in a case.
     shape_kinds: the kinds of body shape it takes (orchestrator/shapes: clump, superquadric, rounded_box).
     mixed_kinds: bodies of several of those kinds in one case (a clump beside a superquadric).
     glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
@@ -51,6 +52,7 @@ class Capabilities:
     contact_output: bool = False
     unrecorded_kinds: tuple[str, ...] = ()
     bilinear_only_kinds: tuple[str, ...] = ()
+    one_rounding_kinds: tuple[str, ...] = ()
     shape_kinds: tuple[str, ...] = ("clump",)
     mixed_kinds: bool = False
     glued_kinds: tuple[str, ...] = ()
@@ -76,7 +78,8 @@ ENGINES: dict[str, EngineEntry] = {
             "orchestrator.engines.liggghts.adapter:LiggghtsAdapter",
             Capabilities(clumps=True, mixed_bodies=False, meshes=True, mpi=True, restart=True, compiled_law=True,
                          implicit=False, state_file="state.restart", contact_output=True,
-                         unrecorded_kinds=("rounded_box",), bilinear_only_kinds=("rounded_box",), shape_kinds=("clump", "superquadric", "rounded_box"), glued_kinds=("clump", "superquadric", "rounded_box"),
+                         unrecorded_kinds=("rounded_box",), bilinear_only_kinds=("rounded_box",),
+                         one_rounding_kinds=("rounded_box",), shape_kinds=("clump", "superquadric", "rounded_box"), glued_kinds=("clump", "superquadric", "rounded_box"),
                          preferred_brick="superquadric"),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
             (("brick on brick, aligned_y, 40.2°", "slides 0.234 m: one superquadric contact under a face tilts to carry the "

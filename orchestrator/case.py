@@ -293,6 +293,15 @@ def engine_limits(case: Case) -> str | None:
         if case.law != ContactLaw.bilinear:
             return (f"contacts.law: {kind} bodies touch by the bilinear law of Richefeu et al. (2012) only on {engine}; "
                     f"allowed: bilinear (got {case.law.value})")
+    used_shapes = {c.shape for c in case.bodies.clumps}
+    for kind in sorted(used_kinds & set(can.one_rounding_kinds)):
+        first = None
+        for i, shape in enumerate(case.shapes):
+            if shape.kind == kind and shape.name in used_shapes:
+                first = shape.rounding if first is None else first
+                if shape.rounding != first:
+                    return (f"shapes.{i}.rounding: {engine} takes one rounding for all {kind} bodies of a case; "
+                            f"allowed: {first!r} (got {shape.rounding!r})")
     glued = {case.shape(c.shape).kind for c in case.bodies.clumps if c.fixed}
     for kind in sorted(glued - set(can.glued_kinds)):
         able = [name for name in ENGINE_NAMES if kind in capabilities(name).glued_kinds]

@@ -35,13 +35,9 @@ def one_atom_bodies(plan: RunPlan) -> bool:
 
 
 def rounding(plan: RunPlan) -> float | None:
-    """The rounding radius (m) of a run of rounded boxes (pair_style roundedbox takes one), else None.
-
-    Raises ValueError naming the shapes when their roundings differ."""
-    values = {float(body.rounding) for body in plan.shapes if body.kind == "rounded_box"}  # type: ignore[attr-defined]
-    if len(values) > 1:
-        raise ValueError(f"shapes.rounding: LIGGGHTS takes one rounding for all rounded_box bodies of a case; got {sorted(values)}")
-    return values.pop() if values else None
+    """The rounding radius (m) of a run of rounded boxes (pair_style roundedbox takes one: the case
+    check `capabilities.one_rounding_kinds` holds them to it), else None."""
+    return next((float(body.rounding) for body in plan.shapes if body.kind == "rounded_box"), None)  # type: ignore[attr-defined]
 
 
 def _data_shape(body: BodyShape) -> tuple[tuple[float, float, float], tuple[float, float], float]:
