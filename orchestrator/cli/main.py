@@ -204,10 +204,10 @@ def doctor() -> None:
         built = bool(status.get("built"))
         details = str(status.get("path")) if built else "not built yet: run `demorch build-contact`"
         table.add_row(f"bilinear law plugin ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
-        if "superquadric_built" in status:  # an engine build of its own for superquadric bodies
+        if "superquadric_built" in status:  # an engine build of its own for one-atom bodies (superquadrics, rounded boxes)
             built = bool(status["superquadric_built"])
             details = str(status["superquadric_executable"]) if built else "not built yet: run `demorch build-contact` (about 6 min)"
-            table.add_row(f"superquadric bodies ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
+            table.add_row(f"superquadric and rounded-box bodies ({name})", "[green]built[/]" if built else "[yellow]not built[/]", details)
     for name in ENGINE_NAMES:  # what each engine's avalanche brick misses against the study's code
         gaps = brick_gaps(name)
         if gaps:
