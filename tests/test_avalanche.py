@@ -334,6 +334,17 @@ def test_engine_override_gives_a_runnable_study() -> None:
     assert with_engine(study, None) is study
 
 
+def test_the_packaged_reference_is_the_shared_one_where_both_exist() -> None:
+    """The packaged copy (installs without shared/, fresh clones) carries every number the project's
+    shared reference has: a section missing there breaks the studies that read it."""
+    import orchestrator.studies.reference as reference
+
+    if not reference.SHARED_REFERENCE.is_file():
+        pytest.skip("no shared/reference beside this checkout")
+    assert reference.PACKAGED_REFERENCE.read_text() == reference.SHARED_REFERENCE.read_text(), (
+        "copy shared/reference/reference.toml to orchestrator/data/reference.toml")
+
+
 def test_reference_numbers_fall_back_to_the_packaged_copy(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """Installed without the project's shared/ folder, reports still have their reference numbers."""
     import orchestrator.studies.reference as avalanche_study
