@@ -39,7 +39,7 @@ from orchestrator.case import parse_case  # noqa: E402
 from orchestrator.engines.liggghts.deck import CLUMP_COLUMNS  # noqa: E402
 from orchestrator.engines.liggghts.dump import clump_states, read_binary_dump, read_dump  # noqa: E402
 from orchestrator.engines.common import read_frames  # noqa: E402
-from orchestrator.plan import clump_shapes  # noqa: E402
+from orchestrator.physics import clump_shapes  # noqa: E402
 
 BRICKS = 6300
 LAYOUT = (4, 2, 1)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
+from orchestrator.shapes import BodyShape
 from orchestrator.case import Case, CaseError, ContactLaw, Sphere
 from orchestrator.capabilities import capabilities
 
@@ -33,19 +34,25 @@ class BodyInfo:
     inertia: tuple[float, float, float]  # principal moments about the body axes
 
 
-def bodies(case: Case) -> list[BodyInfo]:
-    """Spheres first, then clumps, as the engines number them."""
+def clump_shapes(case: Case) -> tuple[BodyShape, ...]:
+    """Each clump's body shape at its material's density, in case order (one object per shape and material)."""
+    built: dict[tuple[str, str], BodyShape] = {}
+    for c in case.bodies.clumps:
+        if (c.shape, c.material) not in built:
+            built[(c.shape, c.material)] = case.shape(c.shape).body(case.material(c.material).density)
+    return tuple(built[(c.shape, c.material)] for c in case.bodies.clumps)
+
+
+def bodies(case: Case, shapes: tuple[BodyShape, ...] | None = None) -> list[BodyInfo]:
+    """Spheres first, then clumps, as the engines number them (`shapes`: clump_shapes(case), when made already)."""
     table = [
         BodyInfo(s.material, mass, s.radius, s.position, s.velocity, 1, (0.4 * mass * s.radius**2,) * 3)
         for s in case.bodies.spheres
         for mass in [sphere_mass(s, case.material(s.material).density)]
     ]
-    for c in case.bodies.clumps:
-        shape = case.shape(c.shape)
-        body = shape.body(case.material(c.material).density)
-        faces = body.face_contacts
+    for c, body in zip(case.bodies.clumps, clump_shapes(case) if shapes is None else shapes):
         inertia = tuple(float(i) for i in body.principal_inertia)
-        table.append(BodyInfo(c.material, body.mass, body.bounding_radius, c.position, c.velocity, faces, inertia))
+        table.append(BodyInfo(c.material, body.mass, body.bounding_radius, c.position, c.velocity, body.face_contacts, inertia))
     return table
 
 

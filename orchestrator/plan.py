@@ -112,7 +112,8 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
     Raises CaseError (one line naming the field) for what the checks find (orchestrator.preflight).
     """
     schedule = physics.schedule(case)
-    table = tuple(physics.bodies(case))
+    shapes = physics.clump_shapes(case)
+    table = tuple(physics.bodies(case, shapes))
     triangles = tuple(geometry.wall_triangles(wall, case_dir) for wall in case.walls)
     output = estimate(case, schedule, table)
     preflight.check_all(case, case_dir, schedule, table, triangles, output)
@@ -131,17 +132,8 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
         removals=MappingProxyType(removals),
         rest=rest_checks(case, schedule, removals, table),
         output=output,
-        shapes=clump_shapes(case),
+        shapes=shapes,
     )
-
-
-def clump_shapes(case: Case) -> tuple[BodyShape, ...]:
-    """Each clump's body shape, in case order (one object per shape and material)."""
-    built: dict[tuple[str, str], BodyShape] = {}
-    for c in case.bodies.clumps:
-        if (c.shape, c.material) not in built:
-            built[(c.shape, c.material)] = case.shape(c.shape).body(case.material(c.material).density)
-    return tuple(built[(c.shape, c.material)] for c in case.bodies.clumps)
 
 
 def rest_checks(case: Case, schedule: physics.Schedule, removals: Mapping[str, int],
