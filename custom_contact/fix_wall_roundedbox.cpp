@@ -107,6 +107,23 @@ void FixWallRoundedBox::post_force(int)
   const bool keep = !update->setupflag;
 
   history_->begin(nlocal);
+  // the walls' triangles, each once a step (their planes and bounds), not once per body
+  triangles_.clear();
+  for (size_t m = 0; m < meshes_.size(); m++) {
+    TriMesh *mesh = meshes_[m]->triMesh();
+    const int triangles = mesh->sizeLocal() + mesh->sizeGhost();
+    for (int t = 0; t < triangles; t++) {
+      double a[3], b[3], c[3];
+      mesh->node(t, 0, a);
+      mesh->node(t, 1, b);
+      mesh->node(t, 2, c);
+      WallTriangle w;
+      triangle(a, b, c, w.triangle);
+      w.partner = mesh_codes_[m] * 4294967296.0 + static_cast<double>(mesh->id(t));
+      w.type = meshes_[m]->atomTypeWall();
+      triangles_.push_back(w);
+    }
+  }
   std::vector<WallContact> found;
   SubContact sub[MAX_WALL];
   Box box;
@@ -114,24 +131,15 @@ void FixWallRoundedBox::post_force(int)
   for (int i = 0; i < nlocal; i++) {
     if (!(mask[i] & groupbit)) continue;
     PairRoundedBox::body(atom, i, rounding_, box);
-    box.r = rounding_;
     found.clear();
-    for (size_t m = 0; m < meshes_.size(); m++) {
-      TriMesh *mesh = meshes_[m]->triMesh();
-      const int triangles = mesh->sizeLocal() + mesh->sizeGhost();
-      for (int t = 0; t < triangles; t++) {
-        double a[3], b[3], c[3];
-        mesh->node(t, 0, a);
-        mesh->node(t, 1, b);
-        mesh->node(t, 2, c);
-        const int n = boxTriangleContacts(box, a, b, c, sub);
-        for (int s = 0; s < n; s++) {
-          WallContact w;
-          w.contact = sub[s];
-          w.partner = mesh_codes_[m] * 4294967296.0 + static_cast<double>(mesh->id(t));
-          w.type = meshes_[m]->atomTypeWall();
-          found.push_back(w);
-        }
+    for (size_t t = 0; t < triangles_.size(); t++) {
+      const int n = boxTriangleContacts(box, triangles_[t].triangle, sub);
+      for (int s = 0; s < n; s++) {
+        WallContact w;
+        w.contact = sub[s];
+        w.partner = triangles_[t].partner;
+        w.type = triangles_[t].type;
+        found.push_back(w);
       }
     }
     // one contact per vertex and plane: coplanar triangles sharing the vertex's spot keep the lowest

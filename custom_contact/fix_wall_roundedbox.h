@@ -40,6 +40,12 @@ class FixWallRoundedBox : public Fix {
   std::vector<std::string> mesh_ids_;
   std::vector<class FixMeshSurface *> meshes_;
   std::vector<double> mesh_codes_;  // 20-bit hash of each mesh's fix ID (djb2)
+  struct WallTriangle {
+    RoundedBox::Triangle triangle;
+    double partner;  // the mesh's code * 2^32 + the triangle's id
+    int type;        // the mesh's atom type
+  };
+  std::vector<WallTriangle> triangles_;  // every mesh's local and ghost triangles, remade each step
   RoundedBox::Constants **constants_;
   class FixRoundedBoxHistory *history_;
   std::string history_id_;

@@ -158,25 +158,28 @@ void PairRoundedBox::compute(int eflag, int vflag)
   (void) mask;
 
   history_->begin(nlocal);
+  // every body as a box once (orientation matrix, bounding radius), not once per neighbour
+  const int nall = nlocal + atom->nghost;
+  if (static_cast<int>(boxes_.size()) < nall) { boxes_.resize(nall); bounds_.resize(nall); }
+  for (int i = 0; i < nall; i++) {
+    body(atom, i, rounding_, boxes_[i]);
+    bounds_[i] = std::sqrt(dot(boxes_[i].h, boxes_[i].h)) + rounding_;
+  }
   SubContact sub[MAX_PAIR];
-  Box A, B;
   History next;
   for (int ii = 0; ii < list->inum; ii++) {
     const int i = list->ilist[ii];
     const int *neighbours = list->firstneigh[i];
     for (int jj = 0; jj < list->numneigh[i]; jj++) {
       const int j = neighbours[jj] & NEIGHMASK;
+      // bounding spheres first: most neighbours do not touch
+      const double d[3] = { x[i][0] - x[j][0], x[i][1] - x[j][1], x[i][2] - x[j][2] };
+      const double reach = bounds_[i] + bounds_[j];
+      if (dot(d, d) >= reach * reach) continue;
       // A is the lower tag: the same pair gives the same numbers on every process
       const bool i_first = tag[i] < tag[j];
       const int a = i_first ? i : j, b = i_first ? j : i;
-      // bounding spheres first: most neighbours do not touch
-      const double *sa = atom->shape[a], *sb = atom->shape[b];
-      const double d[3] = { x[a][0] - x[b][0], x[a][1] - x[b][1], x[a][2] - x[b][2] };
-      const double reach = std::sqrt(sa[0] * sa[0] + sa[1] * sa[1] + sa[2] * sa[2]) + std::sqrt(sb[0] * sb[0] + sb[1] * sb[1] + sb[2] * sb[2]);
-      if (dot(d, d) >= reach * reach) continue;
-      body(atom, a, rounding_, A);
-      body(atom, b, rounding_, B);
-      const int n = boxBoxContacts(A, B, sub);
+      const int n = boxBoxContacts(boxes_[a], boxes_[b], sub);
       if (!n) continue;
       const Constants &k = constants_[type[a]][type[b]];
       const bool j_local = j < nlocal;

@@ -18,6 +18,7 @@ PairStyle(roundedbox,PairRoundedBox)
 #ifndef DEMORCH_PAIR_ROUNDEDBOX_H
 #define DEMORCH_PAIR_ROUNDEDBOX_H
 
+#include <vector>
 #include "pair.h"
 #include "roundedbox_law.h"
 
@@ -41,6 +42,8 @@ class PairRoundedBox : public Pair {
   double reach_;  // largest distance from a centre to its surface, over all bodies (m)
   RoundedBox::Constants **constants_;
   class FixRoundedBoxHistory *history_;
+  std::vector<RoundedBox::Box> boxes_;  // per local and ghost body, remade each step
+  std::vector<double> bounds_;          // bounding radius |h| + R (m)
   void allocate();
 };
 

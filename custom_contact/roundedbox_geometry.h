@@ -26,6 +26,7 @@
 #ifndef DEMORCH_ROUNDEDBOX_GEOMETRY_H
 #define DEMORCH_ROUNDEDBOX_GEOMETRY_H
 
+#include <algorithm>
 #include <cmath>
 
 namespace RoundedBox {
@@ -71,13 +72,6 @@ inline void toWorld(const Box &b, const double *local, double *world)
     world[i] = b.c[i] + b.R[i][0]*local[0] + b.R[i][1]*local[1] + b.R[i][2]*local[2];
 }
 
-inline void toLocal(const Box &b, const double *world, double *local)
-{
-  const double d[3] = { world[0] - b.c[0], world[1] - b.c[1], world[2] - b.c[2] };
-  for (int k = 0; k < 3; k++)
-    local[k] = b.R[0][k]*d[0] + b.R[1][k]*d[1] + b.R[2][k]*d[2];
-}
-
 /* Vertex v (bits 0, 1, 2: + along axes 0, 1, 2) of the inner box, world coordinates. */
 inline void vertex(const Box &b, int v, double *world)
 {
@@ -85,127 +79,177 @@ inline void vertex(const Box &b, int v, double *world)
   toWorld(b, local, world);
 }
 
-/* Edge e = 4 axis + s of an inner box (axis: its direction; bit 0 of s: + along the next axis,
- * bit 1: + along the one after): its first end (world), unit direction, length, and the two other
- * axes with the edge's signs along them (its outward normal cone). */
-struct Edge {
-  double start[3], direction[3], length;
-  int axes[2];
-  double signs[2];
+/* Two boxes seen from each other, computed once per pair: B's axes and centre in A's frame, and
+ * each box's inner vertices in the other's frame. Every test below works in one box's frame, where
+ * that box is axis-aligned; only the sub-contacts found are turned into world coordinates. */
+struct Pose {
+  double R[3][3];       // R[i][j]: B's axis j along A's axis i
+  double t[3];          // B's centre in A's frame (m)
+  double a_in_b[8][3];  // A's vertex v in B's frame (m)
+  double b_in_a[8][3];  // B's vertex v in A's frame (m)
 };
 
-inline void edge(const Box &b, int e, Edge &out)
+/* B's axes and centre in A's frame (all the separating axis test needs). */
+inline void relativeFrame(const Box &A, const Box &B, Pose &p)
 {
-  const int k = e / 4, s = e % 4;
-  out.axes[0] = (k + 1) % 3;
-  out.axes[1] = (k + 2) % 3;
-  out.signs[0] = (s & 1) ? 1.0 : -1.0;
-  out.signs[1] = (s & 2) ? 1.0 : -1.0;
-  double local[3];
-  local[k] = -b.h[k];
-  local[out.axes[0]] = out.signs[0] * b.h[out.axes[0]];
-  local[out.axes[1]] = out.signs[1] * b.h[out.axes[1]];
-  toWorld(b, local, out.start);
-  for (int i = 0; i < 3; i++) out.direction[i] = b.R[i][k];
-  out.length = 2.0 * b.h[k];
+  const double d[3] = { B.c[0] - A.c[0], B.c[1] - A.c[1], B.c[2] - A.c[2] };
+  for (int i = 0; i < 3; i++) {
+    p.t[i] = A.R[0][i] * d[0] + A.R[1][i] * d[1] + A.R[2][i] * d[2];
+    for (int j = 0; j < 3; j++) p.R[i][j] = A.R[0][i] * B.R[0][j] + A.R[1][i] * B.R[1][j] + A.R[2][i] * B.R[2][j];
+  }
 }
 
-/* One vertex against the other box. `flip`: the vertex belongs to B (the normal then points from
- * the box that owns the closest point, A, to the vertex, reversed to keep "from B to A"). */
-inline bool vertexAgainstBox(const double *p, double r_vertex, const Box &other, bool flip, int key, SubContact &out)
+/* Each box's inner vertices in the other's frame, from the relative frame. */
+inline void relativeVertices(const Box &A, const Box &B, Pose &p)
+{
+  double a_centre[3];  // A's centre in B's frame
+  for (int j = 0; j < 3; j++) a_centre[j] = -(p.R[0][j] * p.t[0] + p.R[1][j] * p.t[1] + p.R[2][j] * p.t[2]);
+  double b_axes[3][3], a_axes[3][3];  // [k]: the half extent along axis k, in the other's frame
+  for (int k = 0; k < 3; k++)
+    for (int m = 0; m < 3; m++) {
+      b_axes[k][m] = B.h[k] * p.R[m][k];  // B's axis k in A's frame: column k
+      a_axes[k][m] = A.h[k] * p.R[k][m];  // A's axis k in B's frame: row k
+    }
+  for (int v = 0; v < 8; v++)
+    for (int m = 0; m < 3; m++) {
+      double b = p.t[m], a = a_centre[m];
+      for (int k = 0; k < 3; k++) {
+        if ((v >> k) & 1) { b += b_axes[k][m]; a += a_axes[k][m]; }
+        else { b -= b_axes[k][m]; a -= a_axes[k][m]; }
+      }
+      p.b_in_a[v][m] = b;
+      p.a_in_b[v][m] = a;
+    }
+}
+
+/* A vertex (coordinates u in the frame of box `other`) against that box. `flip`: the vertex belongs
+ * to B and `other` is A (the normal then points from A's closest point to the vertex, reversed to
+ * keep "from B to A"). */
+inline bool vertexAgainstBox(const double *u, double r_vertex, const Box &other, bool flip, int key, SubContact &out)
 {
   const double reach = r_vertex + other.r;
-  // in the other box's frame first: most vertices are out of reach, and need no more
-  double u[3], clamped[3];
-  toLocal(other, p, u);
+  double clamped[3];
   for (int k = 0; k < 3; k++) clamped[k] = u[k] < -other.h[k] ? -other.h[k] : (u[k] > other.h[k] ? other.h[k] : u[k]);
   const double gap[3] = { u[0] - clamped[0], u[1] - clamped[1], u[2] - clamped[2] };
-  if (dot(gap, gap) >= reach * reach) return false;
-  double q[3];
+  const double squared = dot(gap, gap);
+  if (squared >= reach * reach) return false;
+  const double distance = std::sqrt(squared);
+  if (distance <= 1e-12 * reach) return false;  // inner boxes interpenetrating
+  double q[3], direction[3];  // the closest point (world), the unit direction from it to the vertex
   toWorld(other, clamped, q);
-  const double distance = std::sqrt(dot(gap, gap));
-  if (distance >= reach || distance <= 1e-12 * reach) return false;  // apart, or inner boxes interpenetrating
+  for (int i = 0; i < 3; i++) direction[i] = (other.R[i][0] * gap[0] + other.R[i][1] * gap[1] + other.R[i][2] * gap[2]) / distance;
   const double sign = flip ? -1.0 : 1.0;
   out.key = key;
   out.overlap = reach - distance;
-  for (int i = 0; i < 3; i++) out.normal[i] = sign * (p[i] - q[i]) / distance;
-  // midway through the overlap, along the line from q to p
+  // midway through the overlap, along the line from q to the vertex
   const double along = other.r - 0.5 * out.overlap;
-  for (int i = 0; i < 3; i++) out.point[i] = q[i] + (p[i] - q[i]) / distance * along;
-  return true;
-}
-
-/* Whether a direction (world) lies in the outward normal cone of an edge of a box: its components
- * along the edge's two other axes have the edge's signs, or lean out of the cone by less than 0.01
- * (0.6 degrees). Where two faces lie on each other the normal is on the cone's boundary (a face's
- * normal), and a rotation of 1e-9 rad would otherwise switch the corners' edge pairs on and off,
- * and with them their histories; leaning out that little, the edge pair's normal is the face's to
- * within 0.6 degrees. */
-inline bool inEdgeCone(const Box &b, const double *n, const int *axes, const double *signs)
-{
-  const double tolerance = 1e-2;
-  for (int m = 0; m < 2; m++) {
-    const int k = axes[m];
-    const double component = b.R[0][k]*n[0] + b.R[1][k]*n[1] + b.R[2][k]*n[2];
-    if (signs[m] * component < -tolerance) return false;
+  for (int i = 0; i < 3; i++) {
+    out.normal[i] = sign * direction[i];
+    out.point[i] = q[i] + direction[i] * along;
   }
   return true;
 }
 
-inline bool edgeAgainstEdge(const Box &A, const Edge &ea, const Box &B, const Edge &eb, int key, SubContact &out)
+/* Edge e = 4 axis + s of an inner box (axis: its direction; bit 0 of s: + along the next axis,
+ * bit 1: + along the one after): its two end vertices, the first at - along the axis. */
+const int EDGE_START[12] = { 0, 2, 4, 6, 0, 4, 1, 5, 0, 1, 2, 3 };
+inline int edgeStart(int e) { return EDGE_START[e]; }
+inline int edgeEnd(int e) { return EDGE_START[e] | (1 << (e / 4)); }
+
+/* Where a point lies against a box grown by `reach` (its frame): bit 2k set when beyond the + face
+ * of axis k, bit 2k + 1 beyond the - face. Two points with a bit in common lie beyond the same face,
+ * and so does the segment between them (Cohen & Sutherland's outcodes). */
+inline int outcode(const double *u, const Box &b, double reach)
 {
-  const double *a0 = ea.start, *da = ea.direction, *b0 = eb.start, *db = eb.direction;
-  const double la = ea.length, lb = eb.length;
+  int code = 0;
+  for (int k = 0; k < 3; k++) {
+    const double limit = b.h[k] + reach;
+    code |= (u[k] > limit) << (2 * k);
+    code |= (u[k] < -limit) << (2 * k + 1);
+  }
+  return code;
+}
+
+/* Whether a direction lies in the outward normal cone of edge e of a box, given the direction's
+ * components along that box's three axes: its components along the edge's two other axes have the
+ * edge's signs, or lean out of the cone by less than 0.01 (0.6 degrees). Where two faces lie on
+ * each other the normal is on the cone's boundary (a face's normal), and a rotation of 1e-9 rad would
+ * otherwise switch the corners' edge pairs on and off, and with them their histories; leaning out
+ * that little, the edge pair's normal is the face's to within 0.6 degrees. */
+inline bool inEdgeCone(const double *components, int e)
+{
+  const double tolerance = 1e-2;
+  const int k = e / 4, s = e % 4;
+  const double first = (s & 1) ? components[(k + 1) % 3] : -components[(k + 1) % 3];
+  const double second = (s & 2) ? components[(k + 2) % 3] : -components[(k + 2) % 3];
+  return first >= -tolerance && second >= -tolerance;
+}
+
+/* Edge ea of A against edge eb of B, in A's frame. */
+inline bool edgeAgainstEdge(const Box &A, int ea, const Box &B, int eb, const Pose &p, int key, SubContact &out)
+{
+  const int ka = ea / 4, kb = eb / 4;
+  const double la = 2.0 * A.h[ka], lb = 2.0 * B.h[kb];
+  double a0[3];
+  const int start = edgeStart(ea);
+  for (int m = 0; m < 3; m++) a0[m] = (start >> m) & 1 ? A.h[m] : -A.h[m];
+  const double *b0 = p.b_in_a[edgeStart(eb)], *b1 = p.b_in_a[edgeEnd(eb)];
+  // the boxes around the two segments, grown by the reach, must meet (most pairs fail here)
+  const double reach = A.r + B.r;
+  for (int m = 0; m < 3; m++) {
+    const double low = m == ka ? -A.h[m] : a0[m], high = m == ka ? A.h[m] : a0[m];
+    if (low > std::max(b0[m], b1[m]) + reach || high < std::min(b0[m], b1[m]) - reach) return false;
+  }
+  const double db[3] = { p.R[0][kb], p.R[1][kb], p.R[2][kb] };  // A's edge runs along A's axis ka
   const double w0[3] = { a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2] };
-  const double cosine = dot(da, db), d = dot(da, w0), e = dot(db, w0);
+  const double cosine = db[ka], d = w0[ka], e = dot(db, w0);
   const double denominator = 1.0 - cosine * cosine;
   if (denominator < 1e-13) return false;  // parallel (the test below, sine < 1e-6, decides near it)
   const double s = (cosine * e - d) / denominator;  // along A's edge from its start (m)
   const double t = (e - cosine * d) / denominator;  // along B's edge
   // within both segments; a crossing at an end, to 1e-6 of the length, counts (aligned bricks)
   if (s < -1e-6 * la || s > la * (1.0 + 1e-6) || t < -1e-6 * lb || t > lb * (1.0 + 1e-6)) return false;
-  double n[3];
-  cross(da, db, n);
+  double n[3] = { 0.0, 0.0, 0.0 };  // A's axis ka cross db
+  n[(ka + 1) % 3] = -db[(ka + 2) % 3];
+  n[(ka + 2) % 3] = db[(ka + 1) % 3];
   const double sine = std::sqrt(dot(n, n));
   if (sine < 1e-6) return false;  // parallel: their ends' vertex contacts carry them
   for (int i = 0; i < 3; i++) n[i] /= sine;
   double pa[3], pb[3];
-  for (int i = 0; i < 3; i++) { pa[i] = a0[i] + s * da[i]; pb[i] = b0[i] + t * db[i]; }
+  for (int i = 0; i < 3; i++) { pa[i] = a0[i]; pb[i] = b0[i] + t * db[i]; }
+  pa[ka] += s;
   const double gap_dir[3] = { pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2] };
   double gap = dot(n, gap_dir);
-  // orient n from B to A: -n in A's edge cone, n in B's
-  const double minus_n[3] = { -n[0], -n[1], -n[2] };
-  if (!(inEdgeCone(A, minus_n, ea.axes, ea.signs) && inEdgeCone(B, n, eb.axes, eb.signs))) {
-    if (!(inEdgeCone(A, n, ea.axes, ea.signs) && inEdgeCone(B, minus_n, eb.axes, eb.signs))) return false;
+  // orient n from B to A: -n in A's edge cone, n in B's (n's components along B's axes: Rᵀ n)
+  double in_a[3], in_b[3];
+  for (int k = 0; k < 3; k++) { in_a[k] = -n[k]; in_b[k] = p.R[0][k] * n[0] + p.R[1][k] * n[1] + p.R[2][k] * n[2]; }
+  if (!(inEdgeCone(in_a, ea) && inEdgeCone(in_b, eb))) {
+    for (int k = 0; k < 3; k++) { in_a[k] = -in_a[k]; in_b[k] = -in_b[k]; }
+    if (!(inEdgeCone(in_a, ea) && inEdgeCone(in_b, eb))) return false;
     for (int i = 0; i < 3; i++) n[i] = -n[i];
     gap = -gap;
   }
-  const double reach = A.r + B.r;
   if (gap >= reach || gap <= 1e-12 * reach) return false;
   out.key = key;
   out.overlap = reach - gap;
-  for (int i = 0; i < 3; i++) {
-    out.normal[i] = n[i];
-    out.point[i] = pb[i] + n[i] * (B.r - 0.5 * out.overlap);
-  }
+  double point[3];
+  for (int i = 0; i < 3; i++) point[i] = pb[i] + n[i] * (B.r - 0.5 * out.overlap);
+  toWorld(A, point, out.point);
+  for (int i = 0; i < 3; i++) out.normal[i] = A.R[i][0] * n[0] + A.R[i][1] * n[1] + A.R[i][2] * n[2];
   return true;
 }
 
 /* Whether the two outer boxes (inner half extents + rounding) are apart along one of the 15 axes of
  * the separating axis test (Gottschalk, Lin & Manocha 1996, OBBTree): a cheap no for most
  * neighbours; a yes may still have no sub-contact (the rounded corners lie inside the outer box). */
-inline bool outerBoxesApart(const Box &A, const Box &B)
+inline bool outerBoxesApart(const Box &A, const Box &B, const Pose &p)
 {
-  double ea[3], eb[3], Rab[3][3], absR[3][3], t[3];
+  double ea[3], eb[3], absR[3][3];
+  const double (*Rab)[3] = p.R;
+  const double *t = p.t;
   for (int k = 0; k < 3; k++) { ea[k] = A.h[k] + A.r; eb[k] = B.h[k] + B.r; }
-  const double d[3] = { B.c[0] - A.c[0], B.c[1] - A.c[1], B.c[2] - A.c[2] };
-  for (int i = 0; i < 3; i++) {
-    t[i] = A.R[0][i] * d[0] + A.R[1][i] * d[1] + A.R[2][i] * d[2];  // in A's frame
-    for (int j = 0; j < 3; j++) {
-      Rab[i][j] = A.R[0][i] * B.R[0][j] + A.R[1][i] * B.R[1][j] + A.R[2][i] * B.R[2][j];
-      absR[i][j] = std::fabs(Rab[i][j]) + 1e-12;
-    }
-  }
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) absR[i][j] = std::fabs(Rab[i][j]) + 1e-12;
   for (int i = 0; i < 3; i++)
     if (std::fabs(t[i]) > ea[i] + eb[0] * absR[i][0] + eb[1] * absR[i][1] + eb[2] * absR[i][2]) return true;
   for (int j = 0; j < 3; j++) {
@@ -224,22 +268,6 @@ inline bool outerBoxesApart(const Box &A, const Box &B)
   return false;
 }
 
-/* Whether an edge may come within `reach` of a box's inner box: the box around the edge's two ends,
- * in that box's frame, meets the inner box grown by `reach` (a cheap cull before the edge pairs: an
- * edge lying above a face on the far side of its own box is out). */
-inline bool edgeNearBox(const Edge &e, const Box &b, double reach)
-{
-  double end[3], u0[3], u1[3];
-  for (int k = 0; k < 3; k++) end[k] = e.start[k] + e.length * e.direction[k];
-  toLocal(b, e.start, u0);
-  toLocal(b, end, u1);
-  for (int k = 0; k < 3; k++) {
-    const double limit = b.h[k] + reach;
-    if ((u0[k] > limit && u1[k] > limit) || (u0[k] < -limit && u1[k] < -limit)) return false;
-  }
-  return true;
-}
-
 /* Every sub-contact between two rounded boxes (A first: callers put the lower atom tag as A, so the
  * same pair gives the same numbers on every process). Returns how many were written to out. */
 inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
@@ -248,51 +276,73 @@ inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
   const double d[3] = { A.c[0] - B.c[0], A.c[1] - B.c[1], A.c[2] - B.c[2] };
   const double ra = std::sqrt(dot(A.h, A.h)) + A.r, rb = std::sqrt(dot(B.h, B.h)) + B.r;
   if (dot(d, d) >= (ra + rb) * (ra + rb)) return 0;
-  if (outerBoxesApart(A, B)) return 0;
-  int n = 0;
-  double p[3];
-  for (int v = 0; v < 8; v++) {
-    vertex(A, v, p);
-    if (vertexAgainstBox(p, A.r, B, false, v, out[n])) n++;
-  }
-  for (int v = 0; v < 8; v++) {
-    vertex(B, v, p);
-    if (vertexAgainstBox(p, B.r, A, true, 8 + v, out[n])) n++;
-  }
-  // edge pairs, among the edges of each box that come near the other
+  Pose p;
+  relativeFrame(A, B, p);
+  if (outerBoxesApart(A, B, p)) return 0;
+  relativeVertices(A, B, p);
+  // each vertex against the other inner box grown by the reach: a vertex beyond one of its faces
+  // touches nothing, an edge whose two ends are beyond the same face neither
   const double reach = A.r + B.r;
-  Edge ea[12], eb[12];
+  int code_a[8], code_b[8];
+  for (int v = 0; v < 8; v++) {
+    code_a[v] = outcode(p.a_in_b[v], B, reach);
+    code_b[v] = outcode(p.b_in_a[v], A, reach);
+  }
+  int n = 0;
+  for (int v = 0; v < 8; v++)
+    if (!code_a[v] && vertexAgainstBox(p.a_in_b[v], A.r, B, false, v, out[n])) n++;
+  for (int v = 0; v < 8; v++)
+    if (!code_b[v] && vertexAgainstBox(p.b_in_a[v], B.r, A, true, 8 + v, out[n])) n++;
+  // edge pairs, among the edges of each box that come near the other
   int near_a[12], near_b[12], na = 0, nb = 0;
   for (int e = 0; e < 12; e++) {
-    edge(A, e, ea[e]);
-    if (edgeNearBox(ea[e], B, reach)) near_a[na++] = e;
-    edge(B, e, eb[e]);
-    if (edgeNearBox(eb[e], A, reach)) near_b[nb++] = e;
+    if (!(code_a[edgeStart(e)] & code_a[edgeEnd(e)])) near_a[na++] = e;
+    if (!(code_b[edgeStart(e)] & code_b[edgeEnd(e)])) near_b[nb++] = e;
   }
   for (int i = 0; i < na; i++)
     for (int j = 0; j < nb; j++)
-      if (edgeAgainstEdge(A, ea[near_a[i]], B, eb[near_b[j]], 16 + 12 * near_a[i] + near_b[j], out[n])) n++;
+      if (edgeAgainstEdge(A, near_a[i], B, near_b[j], p, 16 + 12 * near_a[i] + near_b[j], out[n])) n++;
   return n;
 }
 
-/* Projection q of p on the plane of triangle (a, b, c); whether it lies inside the triangle (its
- * barycentric coordinates all >= -1e-9, so a point over an edge shared by two triangles is inside
- * both, never neither). */
-inline bool projectOnTriangle(const double *p, const double *a, const double *b, const double *c, double *q)
+/* A wall triangle (a, b, c), with what every test against it needs, made once per step. */
+struct Triangle {
+  double a[3], ab[3], ac[3];
+  double n[3];        // ab x ac
+  double area2;       // |n|^2 (m^4); 0: degenerate, never touched
+  double unit[3];     // n / |n|
+  double lo[3], hi[3];  // its bounding box (m)
+};
+
+inline void triangle(const double *a, const double *b, const double *c, Triangle &t)
 {
-  double ab[3], ac[3], ap[3], n[3];
-  for (int i = 0; i < 3; i++) { ab[i] = b[i] - a[i]; ac[i] = c[i] - a[i]; ap[i] = p[i] - a[i]; }
-  cross(ab, ac, n);
-  const double area2 = dot(n, n);
-  if (area2 <= 0.0) return false;
-  const double height = dot(ap, n) / area2;
-  for (int i = 0; i < 3; i++) q[i] = p[i] - height * n[i];
+  for (int i = 0; i < 3; i++) {
+    t.a[i] = a[i];
+    t.ab[i] = b[i] - a[i];
+    t.ac[i] = c[i] - a[i];
+    t.lo[i] = std::min(a[i], std::min(b[i], c[i]));
+    t.hi[i] = std::max(a[i], std::max(b[i], c[i]));
+  }
+  cross(t.ab, t.ac, t.n);
+  t.area2 = dot(t.n, t.n);
+  const double norm = std::sqrt(t.area2);
+  for (int i = 0; i < 3; i++) t.unit[i] = norm > 0.0 ? t.n[i] / norm : 0.0;
+}
+
+/* Whether the projection q of p on the triangle's plane lies inside the triangle (its barycentric
+ * coordinates all >= -1e-9, so a point over an edge shared by two triangles is inside both, never
+ * neither). */
+inline bool projectOnTriangle(const double *p, const Triangle &tri, double *q)
+{
+  const double ap[3] = { p[0] - tri.a[0], p[1] - tri.a[1], p[2] - tri.a[2] };
+  const double height = dot(ap, tri.n) / tri.area2;
+  for (int i = 0; i < 3; i++) q[i] = p[i] - height * tri.n[i];
   double aq[3], t[3];
-  for (int i = 0; i < 3; i++) aq[i] = q[i] - a[i];
-  cross(aq, ac, t);
-  const double v = dot(t, n) / area2;   // weight of b
-  cross(ab, aq, t);
-  const double w = dot(t, n) / area2;   // weight of c
+  for (int i = 0; i < 3; i++) aq[i] = q[i] - tri.a[i];
+  cross(aq, tri.ac, t);
+  const double v = dot(t, tri.n) / tri.area2;   // weight of b
+  cross(tri.ab, aq, t);
+  const double w = dot(t, tri.n) / tri.area2;   // weight of c
   const double tolerance = -1e-9;
   return v >= tolerance && w >= tolerance && 1.0 - v - w >= tolerance;
 }
@@ -301,18 +351,21 @@ inline bool projectOnTriangle(const double *p, const double *a, const double *b,
  * triangle's inside count: a vertex over an edge shared by two coplanar triangles would otherwise
  * touch both, and a wall's rim is met by a brick's vertices over its triangles. The normal points
  * from the wall to the box (the box is A). Returns how many were written. */
-inline int boxTriangleContacts(const Box &A, const double *a, const double *b, const double *c, SubContact *out)
+inline int boxTriangleContacts(const Box &A, const Triangle &tri, SubContact *out)
 {
-  double centre_projection[3];
-  projectOnTriangle(A.c, a, b, c, centre_projection);
-  const double offset[3] = { A.c[0] - centre_projection[0], A.c[1] - centre_projection[1], A.c[2] - centre_projection[2] };
+  if (tri.area2 <= 0.0) return 0;
   const double bound = std::sqrt(dot(A.h, A.h)) + A.r;
-  if (dot(offset, offset) >= bound * bound) return 0;  // farther from the triangle's plane than the body reaches
+  const double centre[3] = { A.c[0] - tri.a[0], A.c[1] - tri.a[1], A.c[2] - tri.a[2] };
+  if (std::fabs(dot(centre, tri.unit)) >= bound) return 0;  // farther from the triangle's plane than the body reaches
+  for (int i = 0; i < 3; i++)
+    if (A.c[i] + bound <= tri.lo[i] || A.c[i] - bound >= tri.hi[i]) return 0;  // beside the triangle
   int n = 0;
   double p[3], q[3];
   for (int v = 0; v < 8; v++) {
     vertex(A, v, p);
-    if (!projectOnTriangle(p, a, b, c, q)) continue;
+    const double ap[3] = { p[0] - tri.a[0], p[1] - tri.a[1], p[2] - tri.a[2] };
+    if (std::fabs(dot(ap, tri.unit)) >= A.r) continue;  // out of reach of the plane
+    if (!projectOnTriangle(p, tri, q)) continue;
     const double d[3] = { p[0] - q[0], p[1] - q[1], p[2] - q[2] };
     const double distance = std::sqrt(dot(d, d));
     if (distance >= A.r || distance <= 1e-12 * A.r) continue;
