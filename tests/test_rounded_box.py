@@ -41,9 +41,9 @@ def test_a_rounded_box_holds_half_a_degree_below_the_friction_angle_and_slides_h
 def test_a_rounded_box_slides_as_the_study_brick_at_every_angle(placement: str, tmp_path: Path) -> None:
     """The slide after 0.4 s against the tilt, beside the study's code's (reference.toml
     [brick_pair.richefeu_code] slide_mm): from 40.7° on (sliding) within 10 %; below (the tangential
-    springs' elastic creep, tens of microns) within 15 µm. Measured 2026-12-04: at 40.7° 1.24–1.39 mm
-    (the study's code: 1.28–1.45), at 41° 6.64–26.4 mm (6.69–27.8), at 42° 48.4–172.6 mm (48.9–173.6):
-    2 % to 6 % short of the study's, its dt being 1e-6 s against 2.78 µs here."""
+    springs' elastic creep, tens of microns) within 15 µm. Measured 2026-12-04: at 40.7° 1.23–1.40 mm
+    (the study's code: 1.28–1.45), at 41° 6.66–26.4 mm (6.69–27.8), at 42° 48.5–172.8 mm (48.9–173.6):
+    2 % to 6 % short of the study's, its dt being 1e-6 s against 5.56 µs here."""
     reference = brick_pair.reference()
     row = reference["slide_mm"][reference["placements"].index(placement)]
     for angle, expected in zip(reference["angles_deg"], row):
@@ -65,7 +65,7 @@ def test_a_rounded_box_slides_at_coulombs_acceleration(tmp_path: Path) -> None:
 @pytest.mark.parametrize("constants", ["A", "B"])
 def test_the_rounded_box_flat_drop_rebounds_as_the_study_brick(constants: str, tmp_path: Path) -> None:
     """Four corners of k_n each land as the study's brick's: both rebound ratios within 0.5 %.
-    Measured 2026-12-04: A 0.72726 / 0.72696 (0.72720 / 0.72688), B 0.35768 / 0.35184 (0.35750 / 0.35172)."""
+    Measured 2026-12-04: A 0.72717 / 0.72689 (0.72720 / 0.72688), B 0.35744 / 0.35187 (0.35750 / 0.35172)."""
     metrics = brick_drop.run_drop("liggghts", ROUNDED_BOX, constants, False, tmp_path)
     expected = brick_drop.reference()["flat"][f"rebound_ratio_{constants}"]
     assert metrics["rebound_ratios"] == pytest.approx(expected, rel=0.005)
@@ -76,8 +76,8 @@ def test_the_tilted_rounded_box_drops_land_where_the_study_brick_lands(tmp_path:
     centre's apex within 1 mm and the second landing within 2 ms (the study's code is not step-robust
     after 0.27 s), the travel at 0.27 s within 1 mm. Set B: at rest within 5 ms of the study's brick,
     lying flat, its corners within 1 mm (mean) of the study brick's resting corners.
-    Measured 2026-12-04: apex 27.38 mm (27.48), landing 0.2714 s (0.2719), travel 36.7 mm (36.7);
-    B at rest 0.2559 s (0.2553), corners 0.23 mm off (the rounded clump: 0.30; the superquadric: 22.5)."""
+    Measured 2026-12-04: apex 27.13 mm (27.48), landing 0.2701 s (0.2719);
+    B at rest 0.254 s (0.2553), corners 0.33 mm off (the rounded clump: 0.30; the superquadric: 22.5)."""
     tilted = brick_drop.reference()["tilted"]
     a = brick_drop.run_drop("liggghts", ROUNDED_BOX, "A", True, tmp_path / "A")
     assert a["centre_apex"] == pytest.approx(tilted["A_centre_apex"][0], abs=1e-3)
