@@ -101,6 +101,7 @@ void PairRoundedBox::body(Atom *atom, int i, double rounding, Box &box)
   }
   quaternionToMatrix(atom->quaternion[i], box.R);
   box.r = rounding;
+  box.bound = std::sqrt(dot(box.h, box.h)) + rounding;
 }
 
 void PairRoundedBox::init_style()
@@ -160,11 +161,8 @@ void PairRoundedBox::compute(int eflag, int vflag)
   history_->begin(nlocal);
   // every body as a box once (orientation matrix, bounding radius), not once per neighbour
   const int nall = nlocal + atom->nghost;
-  if (static_cast<int>(boxes_.size()) < nall) { boxes_.resize(nall); bounds_.resize(nall); }
-  for (int i = 0; i < nall; i++) {
-    body(atom, i, rounding_, boxes_[i]);
-    bounds_[i] = std::sqrt(dot(boxes_[i].h, boxes_[i].h)) + rounding_;
-  }
+  if (static_cast<int>(boxes_.size()) < nall) boxes_.resize(nall);
+  for (int i = 0; i < nall; i++) body(atom, i, rounding_, boxes_[i]);
   SubContact sub[MAX_PAIR];
   History next;
   for (int ii = 0; ii < list->inum; ii++) {
@@ -172,10 +170,6 @@ void PairRoundedBox::compute(int eflag, int vflag)
     const int *neighbours = list->firstneigh[i];
     for (int jj = 0; jj < list->numneigh[i]; jj++) {
       const int j = neighbours[jj] & NEIGHMASK;
-      // bounding spheres first: most neighbours do not touch
-      const double d[3] = { x[i][0] - x[j][0], x[i][1] - x[j][1], x[i][2] - x[j][2] };
-      const double reach = bounds_[i] + bounds_[j];
-      if (dot(d, d) >= reach * reach) continue;
       // A is the lower tag: the same pair gives the same numbers on every process
       const bool i_first = tag[i] < tag[j];
       const int a = i_first ? i : j, b = i_first ? j : i;

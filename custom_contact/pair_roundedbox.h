@@ -43,7 +43,6 @@ class PairRoundedBox : public Pair {
   RoundedBox::Constants **constants_;
   class FixRoundedBoxHistory *history_;
   std::vector<RoundedBox::Box> boxes_;  // per local and ghost body, remade each step
-  std::vector<double> bounds_;          // bounding radius |h| + R (m)
   void allocate();
 };
 

@@ -36,6 +36,7 @@ struct Box {
   double R[3][3];  // body to world: column k is body axis k in world coordinates
   double h[3];     // inner half extents (m)
   double r;        // rounding radius (m)
+  double bound;    // bounding radius |h| + r (m): a corner's sphere is the farthest surface
 };
 
 struct SubContact {
@@ -274,8 +275,7 @@ inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
 {
   // bounding spheres, then the outer boxes' separating axes
   const double d[3] = { A.c[0] - B.c[0], A.c[1] - B.c[1], A.c[2] - B.c[2] };
-  const double ra = std::sqrt(dot(A.h, A.h)) + A.r, rb = std::sqrt(dot(B.h, B.h)) + B.r;
-  if (dot(d, d) >= (ra + rb) * (ra + rb)) return 0;
+  if (dot(d, d) >= (A.bound + B.bound) * (A.bound + B.bound)) return 0;
   Pose p;
   relativeFrame(A, B, p);
   if (outerBoxesApart(A, B, p)) return 0;
@@ -354,7 +354,7 @@ inline bool projectOnTriangle(const double *p, const Triangle &tri, double *q)
 inline int boxTriangleContacts(const Box &A, const Triangle &tri, SubContact *out)
 {
   if (tri.area2 <= 0.0) return 0;
-  const double bound = std::sqrt(dot(A.h, A.h)) + A.r;
+  const double bound = A.bound;
   const double centre[3] = { A.c[0] - tri.a[0], A.c[1] - tri.a[1], A.c[2] - tri.a[2] };
   if (std::fabs(dot(centre, tri.unit)) >= bound) return 0;  // farther from the triangle's plane than the body reaches
   for (int i = 0; i < 3; i++)
