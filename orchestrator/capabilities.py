@@ -38,6 +38,9 @@ class Capabilities:
     glued_kinds: the kinds of body it can glue in place (`bodies.clumps[i].fixed`).
     preferred_brick: the kind of brick the avalanche studies use on it unless told (chosen by
         measurement: docs/bricks.md).
+    brick_fallbacks: the kinds, in order, a study gets where its settings refuse the preferred one
+        (a linear law or recorded contacts for a kind in bilinear_only_kinds or unrecorded_kinds);
+        a clump after them, and for a bevelled brick.
     """
 
     clumps: bool
@@ -57,6 +60,7 @@ class Capabilities:
     mixed_kinds: bool = False
     glued_kinds: tuple[str, ...] = ()
     preferred_brick: str = "clump"
+    brick_fallbacks: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -80,11 +84,8 @@ ENGINES: dict[str, EngineEntry] = {
                          implicit=False, state_file="state.restart", contact_output=True,
                          unrecorded_kinds=("rounded_box",), bilinear_only_kinds=("rounded_box",),
                          one_rounding_kinds=("rounded_box",), shape_kinds=("clump", "superquadric", "rounded_box"), glued_kinds=("clump", "superquadric", "rounded_box"),
-                         preferred_brick="superquadric"),
+                         preferred_brick="rounded_box", brick_fallbacks=("superquadric",)),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
-            (("brick on brick, aligned_y, 40.2°", "slides 0.234 m: one superquadric contact under a face tilts to carry the "
-              "friction's moment, and across the 15 mm width that tilt lowers the friction angle (2026-12-02)"),
-             ("brick on brick, offset_x_3.9mm, 40.2°", "slides 0.023 m: as across the width (2026-12-02)")),
         ),
         EngineEntry(
             "yade",

@@ -12,7 +12,7 @@ from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_
 from orchestrator.studies.avalanche.study import AvalancheStudy, packing_case, run_study
 from orchestrator.shapes.clump import BrickClump, quaternion_matrix
 from orchestrator.engines.liggghts import adapter as liggghts
-from orchestrator.results import read_results
+from orchestrator.results import Trajectory, read_results
 from orchestrator.results import RESULTS
 from orchestrator.runner import run_case
 from orchestrator.rundir import saved_case
@@ -264,7 +264,6 @@ def test_the_packing_stands_the_box_on_its_base_and_the_release_keeps_vertical_g
     """Gravity along the slope's normal while packing (Fig. 9: the box filled standing on its base, then set
     on the slope); the release's walls are the box's own, its height, without the trap."""
     from orchestrator.studies.avalanche.study import release_case
-    from orchestrator.results import Trajectory
 
     study = tiny_study("liggghts")
     geometry = study.geometry.build()
@@ -275,11 +274,7 @@ def test_the_packing_stands_the_box_on_its_base_and_the_release_keeps_vertical_g
     centre, rear = full.slab(0.040)
     assert (centre[0], centre[2]) == pytest.approx((-1.15, 1.27), abs=0.01)  # Fig. 9's initial centre of mass
     assert (rear[0], rear[2]) == pytest.approx((-1.41, 1.41), abs=0.02)  # Fig. 9's upper end of the box's base
-    n = 3
-    packed = Trajectory(time=np.zeros(1), ids=np.arange(n), material=np.zeros(n, dtype=int), mass=np.ones(n), radius=np.full(n, 0.01),
-                        inertia=np.ones((n, 3)), position=np.tile(geometry.box_to_world([0.05, 0.05, 0.01]), (1, n, 1)),
-                        velocity=np.zeros((1, n, 3)), angular_velocity=np.zeros((1, n, 3)), orientation=np.tile([1.0, 0.0, 0.0, 0.0], (1, n, 1)))
-    release = release_case(study, packed, None)
+    release = release_case(study, _packed(study), None)
     assert tuple(release.gravity) == (0.0, 0.0, -9.81)
     walls = {w.name: w for w in release.walls}
     assert "trap" not in walls and np.linalg.norm(walls["box_back"].edge2) == pytest.approx(study.geometry.box_height)
@@ -322,6 +317,47 @@ def test_packing_key_ignores_what_happens_after_the_opening() -> None:
     assert packing_key(longer) == key and packing_key(other_flow) == key
     assert packing_key(other_seed) != key
     assert packing_key(with_engine(study, "yade")) != key  # another engine, another packing
+
+
+def _packed(study: AvalancheStudy, n: int = 3) -> Trajectory:
+    """A one-frame packing of n bricks at rest in the study's box (for building its release case)."""
+    position = study.geometry.build().box_to_world([0.05, 0.05, 0.01])
+    return Trajectory(time=np.zeros(1), ids=np.arange(n), material=np.zeros(n, dtype=int), mass=np.ones(n), radius=np.full(n, 0.01),
+                      inertia=np.ones((n, 3)), position=np.tile(position, (1, n, 1)), velocity=np.zeros((1, n, 3)),
+                      angular_velocity=np.zeros((1, n, 3)), orientation=np.tile([1.0, 0.0, 0.0, 0.0], (1, n, 1)))
+
+
+def test_packing_step_is_its_own_and_only_the_packings() -> None:
+    """`packing.time_safety_factor` sets the packing's Δt (a fraction of the shortest contact
+    duration) and nothing of the release; unset, the packing is the one it always was (same key)."""
+    from orchestrator import physics
+    from orchestrator.studies.avalanche.study import packing_key, release_case
+
+    study = tiny_study("liggghts")
+    coarse = study.model_copy(update={"packing": study.packing.model_copy(update={"time_safety_factor": 0.04})})
+    default_step = physics.time_step(packing_case(study))
+    # the engine's default factor is 0.02 for the compiled bilinear law: 0.04 doubles the step
+    assert physics.time_step(packing_case(coarse)) == pytest.approx(2.0 * default_step, rel=1e-12)
+    assert packing_key(coarse) != packing_key(study)
+    unset = study.model_copy(update={"packing": study.packing.model_copy(update={"time_safety_factor": None})})
+    assert packing_key(unset) == packing_key(study)
+    packed = _packed(study)
+    assert physics.time_step(release_case(coarse, packed, None)) == physics.time_step(release_case(study, packed, None))
+
+
+@pytest.mark.parametrize(("settings", "kind"), [
+    ({}, "rounded_box"),
+    ({"contacts": {"law": "linear"}}, "superquadric"),
+    ({"release": {"record_contacts": True}}, "superquadric"),
+    ({"brick": {"bevel_deg": 2.0, "rounding": 0.0}}, "clump"),
+    ({"brick": {"kind": "superquadric"}}, "superquadric"),
+    ({"engine": "yade"}, "clump"),
+])
+def test_a_study_gets_the_engines_preferred_brick_where_its_settings_allow(settings: dict, kind: str) -> None:
+    """LIGGGHTS' preferred brick is the rounded box; a study it cannot serve (a linear law, recorded
+    contacts: the rounded box has neither) gets the superquadric, a bevelled brick a clump."""
+    study = AvalancheStudy.model_validate({"name": "x", "engine": "liggghts", **settings})
+    assert study.brick_spec.kind == kind
 
 
 def test_engine_override_gives_a_runnable_study() -> None:

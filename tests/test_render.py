@@ -239,3 +239,22 @@ def test_a_run_from_a_saved_state_has_its_own_domain(tmp_path: Path) -> None:
     trajectory = read_results(tmp_path / "release" / "results.h5")
     z, t = trajectory.position[-1, 0, 2], trajectory.time[-1]
     assert z < -0.05 and z == pytest.approx(-9.81 * t**2 / 2, rel=1e-6)
+
+
+@pytest.mark.parametrize("kind", ["clump", "superquadric", "rounded_box"])
+def test_the_neighbour_skin_is_a_body_thickness(kind: str, tmp_path: Path) -> None:
+    """The skin is SKIN_RADII × the shape's skin length: a clump's largest sphere radius, a one-body
+    brick's half thickness (4 mm), not its bounding radius (17.7 mm: four thicknesses, twice the
+    neighbour pairs; a skin only decides which pairs are tested, never a force)."""
+    from orchestrator.engines.liggghts import deck
+    from orchestrator.plan import make_plan
+    from orchestrator.studies import brick_drop, brick_pair
+
+    case = brick_pair.pair_case("liggghts", brick_drop.study_brick(kind=kind), "aligned", 40.2)
+    shape = make_plan(case, tmp_path).shapes[0]
+    text = render_case(case, tmp_path, tmp_path / "run").read_text()
+    (line,) = [row for row in text.splitlines() if row.startswith("neighbor ")]
+    skin = float(line.split()[1])
+    expected = shape.radius if kind == "clump" else 0.004
+    assert skin == pytest.approx(deck.SKIN_RADII * expected, rel=1e-12)
+    assert skin < shape.bounding_radius / 2.0

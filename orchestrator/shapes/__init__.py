@@ -40,7 +40,10 @@ class BodyShape(Protocol):
     def bounding_radius(self) -> float: ...  # m, centre to the farthest surface point
 
     @property
-    def radius(self) -> float: ...  # m, what neighbour skins are sized by
+    def radius(self) -> float: ...  # m, of each particle the engine moves (a clump's largest sphere; a body's bounding sphere)
+
+    @property
+    def skin_length(self) -> float: ...  # m, what neighbour skins are a multiple of: how thick the body is
 
     @property
     def extent(self) -> np.ndarray: ...  # (3,) m, the centred box holding the solid

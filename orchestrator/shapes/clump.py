@@ -127,8 +127,13 @@ class BrickClump:
 
     @property
     def radius(self) -> float:
-        """The largest sphere radius (the only one on a box): what neighbour skins are sized by."""
+        """m, the largest sphere radius (the only one on a box): the engine moves spheres."""
         return float(self.radii.max())
+
+    @property
+    def skin_length(self) -> float:
+        """m, what neighbour skins are a multiple of: the largest sphere radius."""
+        return self.radius
 
     @property
     def n_spheres(self) -> int:

@@ -53,8 +53,12 @@ def id_ranges(ids: list[int]) -> str:
 # before the pile is at rest, scatters by 100 kg/m3 between such round-off twins either way
 # (docs/benchmarks.md, "The neighbour bins").
 MAX_BINS = 2e7
-# Neighbour skin in largest radii. Chosen by measurement (benchmarks/flow_throughput.py, `settings`
-# sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it.
+# Neighbour skin in skin lengths: the largest sphere radius, or a one-body brick's half thickness
+# (shapes' `skin_length`). Chosen by measurement on spheres (benchmarks/flow_throughput.py, `settings`
+# sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it. Sized by a
+# superquadric's or rounded box's bounding radius instead, the skin was 17.7 mm for a 4 mm half
+# thickness: twice the neighbour pairs (31 against 16 per brick in the full-scale release) and 6 %
+# more time per step (rounded boxes, 2026-12-04); a skin never changes a force.
 SKIN_RADII = 1.0
 # LIGGGHTS clears a pair's contact history (surfacesClose) only while the pair is closer than this
 # factor × its radii sum without touching; at its default, 1, never. The bilinear law keeps its force
@@ -82,6 +86,11 @@ def primes_above(start: int, count: int) -> list[int]:
 def _sphere_radii(plan: RunPlan) -> list[float]:
     """The radius of every particle LIGGGHTS meets: spheres, clump spheres, superquadrics' bounding spheres."""
     return [s.radius for s in plan.case.bodies.spheres] + [body.radius for body in plan.shapes]
+
+
+def _skin_length(plan: RunPlan) -> float:
+    """m, what the neighbour skin is a multiple of: the largest sphere radius or shape skin length."""
+    return float(max([s.radius for s in plan.case.bodies.spheres] + [body.skin_length for body in plan.shapes]))
 
 
 def bin_size(domain: Domain, cutoff: float, max_bins: float = MAX_BINS) -> float | None:
@@ -209,7 +218,7 @@ def write_deck(plan: RunPlan, rundir: Path, processor_grid: str = "* * *", max_b
     segments = run_segments(plan, start)
     segment = plan.segment
     radius_max = float(max(_sphere_radii(plan)))
-    skin = skin_radii * radius_max
+    skin = skin_radii * _skin_length(plan)
     context = {
         "name": case.name,
         "processors": [int(p) if p != "*" else None for p in processor_grid.split()],

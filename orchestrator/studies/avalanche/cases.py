@@ -49,7 +49,8 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
 
 
 def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, rest: RestStop | None,
-          contacts: list[dict[str, Any]], clumps: list[dict[str, Any]], walls: list[dict[str, object]], **extra: Any) -> Case:
+          contacts: list[dict[str, Any]], clumps: list[dict[str, Any]], walls: list[dict[str, object]],
+          safety_factor: float | None = None, **extra: Any) -> Case:
     spec = study.brick_spec
     return parse_case(
         {
@@ -57,7 +58,7 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
             "engine": study.engine.value,
             "seed": study.seed,
             "time": {"duration": duration, "output_interval": min(output_interval, duration),
-                     "stop_at_rest": rest.model_dump() if rest is not None else None},
+                     "stop_at_rest": rest.model_dump() if rest is not None else None, "safety_factor": safety_factor},
             "materials": [
                 {"name": "brick", "density": spec.density},
                 {"name": "board", "density": 1400.0},
@@ -101,7 +102,7 @@ def packing_case(study: AvalancheStudy, brick_brick_mu: float | None = None) -> 
     walls = geometry.walls(trap_closed=True, wall_height=height, lid=study.packing.kind == "ordered_pile")
     mu = first_packing_mu(study) if brick_brick_mu is None else brick_brick_mu
     return _case(study, "packing", study.packing.settle_time, study.release.output_interval, study.packing.stop_at_rest,
-                 _contacts(study.packing.contacts or study.contacts, mu), clumps, walls,
+                 _contacts(study.packing.contacts or study.contacts, mu), clumps, walls, study.packing.time_safety_factor,
                  gravity=list(geometry.packing_gravity()), save_state=capabilities(study.engine).restart)
 
 

@@ -113,6 +113,11 @@ class PackingSpec(Strict):
     # studies (a campaign) that vary the contacts of the flow only.
     contacts: ContactSpec | None = None
     brick_brick_mu: Real(unit="1", ge=0.0, le=10.0) | None = None  # shortcut: only μ brick/brick differs while packing (the search's first trial)
+    # The packing's Δt as a fraction of the shortest contact duration (a case's time.safety_factor).
+    # Default: the engine's, as in the release. The packing only makes the initial state (its
+    # density and fabric are what the release sees), so it may run at a coarser step than the flow;
+    # docs/bricks.md gives the measured case (rounded boxes packed at the superquadric's step).
+    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) | None = None
     density_search: DensitySearchSpec = DensitySearchSpec()
     # Ordered pile only: turn each brick half a turn about a random axis, or not (the paper's flips).
     flips: bool = False
@@ -194,12 +199,16 @@ class AvalancheStudy(Strict):
     @property
     def brick_spec(self) -> BrickSpec:
         """The brick with its kind settled: as given, else the engine's preferred kind
-        (capabilities.preferred_brick: the superquadric on LIGGGHTS, chosen by measurement,
-        docs/bricks.md), a clump where that cannot be had (a bevelled brick)."""
+        (capabilities.preferred_brick: the rounded box on LIGGGHTS, chosen by measurement,
+        docs/bricks.md), else the first of its fallbacks the study's settings allow (the
+        superquadric for a linear law or recorded contacts), a clump where none can be had (a
+        bevelled brick)."""
         if self.brick.kind is not None:
             return self.brick
-        preferred = capabilities(self.engine).preferred_brick
-        return self.brick.model_copy(update={"kind": "clump" if self.brick.bevel_deg else preferred})
+        can = capabilities(self.engine)
+        refused = set(can.bilinear_only_kinds if self.contacts.law != "bilinear" else ()) | set(can.unrecorded_kinds if self.release.record_contacts else ())
+        usable = [kind for kind in (can.preferred_brick, *can.brick_fallbacks) if kind not in refused and not self.brick.bevel_deg]
+        return self.brick.model_copy(update={"kind": usable[0] if usable else "clump"})
 
     @property
     def brick_count(self) -> int:
