@@ -57,7 +57,7 @@ MAX_BINS = 2e7
 # (shapes' `skin_length`). Chosen by measurement on spheres (benchmarks/flow_throughput.py, `settings`
 # sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it. Sized by a
 # superquadric's or rounded box's bounding radius instead, the skin was 17.7 mm for a 4 mm half
-# thickness: twice the neighbour pairs (31 against 16 per brick in the full-scale release) and 6 %
+# thickness: twice the neighbour pairs (31 per brick in the full-scale release, 13–16 at 3–6 mm) and 6 %
 # more time per step (rounded boxes, 2026-12-04); a skin never changes a force.
 SKIN_RADII = 1.0
 # LIGGGHTS clears a pair's contact history (surfacesClose) only while the pair is closer than this
