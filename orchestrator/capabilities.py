@@ -72,6 +72,9 @@ class EngineEntry:
     # Micro-cases of the parity matrix (orchestrator.parity) this engine is known to miss: why, and
     # the value measured (dated in the docs' parity table).
     parity_gaps: tuple[tuple[str, str], ...] = ()
+    # The same for its fallback bricks (capabilities.brick_fallbacks), which the matrix does not run:
+    # kind → (brick-on-brick case, what was measured).
+    fallback_gaps: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = ()
 
 
 ENGINES: dict[str, EngineEntry] = {
@@ -86,6 +89,10 @@ ENGINES: dict[str, EngineEntry] = {
                          one_rounding_kinds=("rounded_box",), shape_kinds=("clump", "superquadric", "rounded_box"), glued_kinds=("clump", "superquadric", "rounded_box"),
                          preferred_brick="rounded_box", brick_fallbacks=("superquadric",)),
             "LIGGGHTS 3.8 (Debian), the bilinear law as a compiled plugin",
+            fallback_gaps=(("superquadric", (
+                ("brick on brick, aligned_y, 40.2°", "slides 0.234 m: one superquadric contact under a face tilts to carry the "
+                 "friction's moment, and across the 15 mm width that tilt lowers the friction angle (2026-12-02)"),
+                ("brick on brick, offset_x_3.9mm, 40.2°", "slides 0.023 m: as across the width (2026-12-02)"))),),
         ),
         EngineEntry(
             "yade",
@@ -138,11 +145,17 @@ def capabilities(name: str | Enum) -> Capabilities:
     return entry(name).capabilities
 
 
-def brick_gaps(name: str | Enum) -> tuple[str, ...]:
-    """The brick-on-brick micro-cases the engine's preferred brick misses, each as "case: what was
-    measured" (its parity gaps): one brick on another's face should hold below atan μ and slide
-    above it at Coulomb's acceleration (docs/bricks.md, "Brick on brick")."""
-    return tuple(f"{case}: {why}" for case, why in entry(name).parity_gaps if case.startswith("brick on brick"))
+def brick_gaps(name: str | Enum, kind: str | None = None) -> tuple[str, ...]:
+    """The brick-on-brick micro-cases the engine's brick of `kind` misses (default: its preferred
+    brick, whose gaps are its parity gaps; a fallback's are its `fallback_gaps`), each as "case:
+    what was measured": one brick on another's face should hold below atan μ and slide above it at
+    Coulomb's acceleration (docs/bricks.md, "Brick on brick")."""
+    found = entry(name)
+    if kind is None or kind == found.capabilities.preferred_brick:
+        gaps = found.parity_gaps
+    else:
+        gaps = dict(found.fallback_gaps).get(kind, ())
+    return tuple(f"{case}: {why}" for case, why in gaps if case.startswith("brick on brick"))
 
 
 def engines_with(**wanted: Any) -> tuple[str, ...]:

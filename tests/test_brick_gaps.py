@@ -18,6 +18,18 @@ def test_brick_gaps_are_the_brick_on_brick_parity_gaps() -> None:
     assert brick_gaps("cocd") == ()
 
 
+def test_a_fallback_brick_brings_its_own_gaps() -> None:
+    """LIGGGHTS' preferred rounded box has none; the superquadric a linear-law study falls back to
+    slides in two placements below atan μ, and the study says so."""
+    from orchestrator.studies.avalanche.spec import AvalancheStudy
+
+    assert brick_gaps("liggghts") == () == brick_gaps("liggghts", "rounded_box")
+    linear = AvalancheStudy.model_validate({"name": "x", "engine": "liggghts", "contacts": {"law": "linear"}})
+    gaps = brick_gaps("liggghts", linear.brick_spec.kind)
+    assert [gap.split(":")[0] for gap in gaps] == ["brick on brick, aligned_y, 40.2°", "brick on brick, offset_x_3.9mm, 40.2°"]
+    assert brick_gaps("liggghts", "clump") == ()
+
+
 def test_the_report_page_shows_each_gap_escaped(tmp_path: Path) -> None:
     page = write_html(tmp_path, "t", [], [], ["brick on brick, aligned, 40.2°: slides <5 mm> & more"])
     text = page.read_text()

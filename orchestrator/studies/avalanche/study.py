@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.capabilities import brick_gaps, capabilities
+from orchestrator.capabilities import brick_gaps
 from orchestrator.case import Case
 from orchestrator.engines import RunOptions
 from orchestrator.results import Trajectory
@@ -89,9 +89,10 @@ class AvalancheKind(StudyKind):
         density = apparent_density(geometry, trajectory.position[0], trajectory.orientation[0], brick)
         report["packing"] = {"bricks": trajectory.n_bodies, "apparent_density": density, "target_apparent_density": study.target_density}
         report["initial"] = initial_state(geometry, trajectory, density, study.packing.volume)
-        if study.brick_spec.kind == capabilities(study.engine).preferred_brick:
-            # where the engine's brick does not hold on another brick's face as the study's does
-            report["brick_gaps"] = list(brick_gaps(study.engine))
+        # where the engine's brick (preferred or fallback) does not hold on another brick's face as the study's does
+        gaps = brick_gaps(study.engine, study.brick_spec.kind)
+        if gaps:
+            report["brick_gaps"] = list(gaps)
         return report, {}
 
     def metrics(self, report: dict[str, Any]) -> dict[str, float]:
