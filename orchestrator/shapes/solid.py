@@ -74,7 +74,5 @@ class OneBodyBrick:
 
     @property
     def skin_length(self) -> float:
-        """m, what neighbour skins are a multiple of: the smallest outer half extent (4 mm for the
-        study's brick). Its bounding radius (17.7 mm) made a skin of four thicknesses and twice the
-        neighbour pairs, for no force that needs them (see liggghts/deck.py, SKIN_RADII)."""
-        return float(self.half_axes.min())
+        """m, what neighbour skins are a multiple of: the bounding radius (a kind may take less)."""
+        return self.bounding_radius  # type: ignore[attr-defined]

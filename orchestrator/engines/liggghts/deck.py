@@ -53,12 +53,14 @@ def id_ranges(ids: list[int]) -> str:
 # before the pile is at rest, scatters by 100 kg/m3 between such round-off twins either way
 # (docs/benchmarks.md, "The neighbour bins").
 MAX_BINS = 2e7
-# Neighbour skin in skin lengths: the largest sphere radius, or a one-body brick's half thickness
-# (shapes' `skin_length`). Chosen by measurement on spheres (benchmarks/flow_throughput.py, `settings`
-# sweep, docs/benchmarks.md); a module constant so that the benchmark can vary it. Sized by a
-# superquadric's or rounded box's bounding radius instead, the skin was 17.7 mm for a 4 mm half
-# thickness: twice the neighbour pairs (31 per brick in the full-scale release, 13–16 at 3–6 mm) and 6 %
-# more time per step (rounded boxes, 2026-12-04); a skin never changes a force.
+# Neighbour skin in skin lengths (shapes' `skin_length`): the largest sphere radius, a superquadric's
+# bounding radius, a rounded box's half thickness. Chosen by measurement on spheres
+# (benchmarks/flow_throughput.py, `settings` sweep, docs/benchmarks.md); a module constant so that
+# the benchmark can vary it. A rounded box sized by its bounding radius had a skin of 17.7 mm for a
+# 4 mm half thickness: twice the neighbour pairs (31 per brick in the full-scale release, 13–16 at
+# 3–6 mm) and 5–6 % more time per step (2026-12-04). Superquadrics keep theirs: at 4 mm their
+# full-scale packing ran 35 % slower (LIGGGHTS moves their contact history at every rebuild). A
+# skin never changes a force.
 SKIN_RADII = 1.0
 # LIGGGHTS clears a pair's contact history (surfacesClose) only while the pair is closer than this
 # factor × its radii sum without touching; at its default, 1, never. The bilinear law keeps its force
