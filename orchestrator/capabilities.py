@@ -145,6 +145,16 @@ def capabilities(name: str | Enum) -> Capabilities:
     return entry(name).capabilities
 
 
+def refused_kinds(name: str | Enum, law: str, record_contacts: bool) -> dict[str, str]:
+    """Shape kind → the setting that refuses it on this engine: `record_contacts` (a kind in
+    unrecorded_kinds, while contacts are recorded) or `contacts.law` (a kind in bilinear_only_kinds,
+    under another law than the bilinear one)."""
+    can = capabilities(name)
+    refused = {kind: "contacts.law" for kind in can.bilinear_only_kinds if law != "bilinear"}
+    refused.update({kind: "record_contacts" for kind in can.unrecorded_kinds if record_contacts})
+    return refused
+
+
 def brick_gaps(name: str | Enum, kind: str | None = None) -> tuple[str, ...]:
     """The brick-on-brick micro-cases the engine's brick of `kind` misses (default: its preferred
     brick, whose gaps are its parity gaps; a fallback's are its `fallback_gaps`), each as "case:

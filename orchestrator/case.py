@@ -261,7 +261,7 @@ class Case(EngineSections, Strict):
 
 def engine_limits(case: Case) -> str | None:
     """The first part of `case` that its engine cannot run, as `field: reason; engines that can: …`."""
-    from orchestrator.capabilities import engines_with
+    from orchestrator.capabilities import engines_with, refused_kinds
 
     can = capabilities(case.engine)
     engine = case.engine.value
@@ -286,13 +286,14 @@ def engine_limits(case: Case) -> str | None:
         able = [name for name in ENGINE_NAMES if capabilities(name).mixed_kinds and used_kinds <= set(capabilities(name).shape_kinds)]
         return (f"shapes: {engine} takes bodies of one kind per case ({' or '.join(can.shape_kinds)}), not {' and '.join(sorted(used_kinds))} "
                 f"together; give every shape one kind; engines that can mix kinds: {', '.join(able) or 'none'}")
-    unrecorded = sorted(used_kinds & set(can.unrecorded_kinds))
-    if case.record_contacts and unrecorded:
+    refused = refused_kinds(engine, case.law.value, case.record_contacts)
+    unrecorded = sorted(kind for kind in used_kinds if refused.get(kind) == "record_contacts")
+    if unrecorded:
         return f"record_contacts: {engine} does not record the contacts of {unrecorded[0]} bodies; allowed: false"
-    for kind in sorted(used_kinds & set(can.bilinear_only_kinds)):
-        if case.law != ContactLaw.bilinear:
-            return (f"contacts.law: {kind} bodies touch by the bilinear law of Richefeu et al. (2012) only on {engine}; "
-                    f"allowed: bilinear (got {case.law.value})")
+    bilinear_only = sorted(kind for kind in used_kinds if refused.get(kind) == "contacts.law")
+    if bilinear_only:
+        return (f"contacts.law: {bilinear_only[0]} bodies touch by the bilinear law of Richefeu et al. (2012) only on {engine}; "
+                f"allowed: bilinear (got {case.law.value})")
     used_shapes = {c.shape for c in case.bodies.clumps}
     for kind in sorted(used_kinds & set(can.one_rounding_kinds)):
         first = None

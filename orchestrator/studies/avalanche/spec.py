@@ -14,6 +14,7 @@ from pydantic import Field, model_validator
 
 from orchestrator.bodies import MIN_SIZE, Brick, BrickShape, ShapeKind
 from orchestrator.case import Name, Real, RestStop, Strict
+from orchestrator.capabilities import refused_kinds
 from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
 from orchestrator.shapes import BodyShape
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, brick_count
@@ -206,7 +207,7 @@ class AvalancheStudy(Strict):
         if self.brick.kind is not None:
             return self.brick
         can = capabilities(self.engine)
-        refused = set(can.bilinear_only_kinds if self.contacts.law != "bilinear" else ()) | set(can.unrecorded_kinds if self.release.record_contacts else ())
+        refused = refused_kinds(self.engine, self.contacts.law, self.release.record_contacts)
         usable = [kind for kind in (can.preferred_brick, *can.brick_fallbacks) if kind not in refused and not self.brick.bevel_deg]
         return self.brick.model_copy(update={"kind": usable[0] if usable else "clump"})
 
