@@ -15,11 +15,24 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-class CocdSettings(_Section):
-    """The cocd engine's solver: Clarabel (interior point, reference), SCS (first order), PIQP (2D only)."""
+COCD_SOLVERS = ("clarabel", "scs", "piqp", "mehrotra")
+COCD_PLANAR_ONLY = ("piqp", "mehrotra")  # their constraints are linear: a 2D contact's cone is two rows
 
-    solver: Literal["clarabel", "scs", "piqp"] = "clarabel"
+
+class CocdSettings(_Section):
+    """The cocd engine's solver: Clarabel (interior point, the reference), SCS (first order), PIQP and
+    mehrotra (2D only; mehrotra is cocd's own interior point, warm-started, docs/engines.md); `auto` is
+    mehrotra in 2D and Clarabel in 3D. `tolerance` bounds the solver's relative primal and dual
+    residuals and duality gap."""
+
+    solver: Literal["auto", "clarabel", "scs", "piqp", "mehrotra"] = "auto"
     tolerance: Annotated[float, Field(gt=0.0, le=1e-2, allow_inf_nan=False, json_schema_extra={"unit": "1"})] = 1e-8
+
+    def resolved(self, planar: bool) -> str:
+        """The solver that runs: `auto` is mehrotra in 2D (the fastest there, docs/benchmarks.md), Clarabel in 3D."""
+        if self.solver == "auto":
+            return "mehrotra" if planar else "clarabel"
+        return self.solver
 
 
 class EngineSections(_Section):

@@ -67,7 +67,7 @@ def now() -> str:
 # every id. Changing what an existing default *is* must change ids: bump this, and record the new
 # defaults (tests/identity_defaults.json, written by running tests/test_identity.py; a test fails
 # when a recorded default changed without a new version).
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 
 Build = dict[str, Any]  # an engine build's stamp (engines.build_stamp): engine, version, code and plugin hashes

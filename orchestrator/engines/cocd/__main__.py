@@ -1,8 +1,8 @@
 """Run a COCD deck: `python -m orchestrator.engines.cocd deck.json` in the run directory.
 
 Writes the deck's frame stream (frames.npy, the YADE adapter's format: time, then an (N, 16) array
-per frame), cocd_stats.json (per step: contacts, solver iterations and seconds; the smallest gap
-seen), and prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end. With the
+per frame), cocd_stats.json (per step: contacts, solver iterations and seconds, and in 2D the
+answer's relative primal and dual residuals and duality gap; the smallest gap seen), and prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end. With the
 deck's `checkpoint_every`, the scene's arrays are saved every so many steps as
 checkpoint.<step>.npz (the two newest kept); with `resume`, the run continues from such a file.
 """
@@ -89,8 +89,9 @@ def at_rest(scene: Scene, rest: dict | None, n: int) -> bool:
 def save_checkpoint(scene: Scene, n: int, stats: dict) -> None:
     """The arrays that change, through a temporary file (a cut-off save never takes the name)."""
     with open("checkpoint.saving.npz", "wb") as handle:
+        keys, impulses = scene.impulses if scene.impulses is not None else (np.zeros(0, np.int64), np.zeros((0, 2)))
         np.savez(handle, step=n, position=scene.position, velocity=scene.velocity, spin=scene.spin, active=scene.walls.active,
-                 stats=json.dumps(stats))
+                 stats=json.dumps(stats), impulse_keys=keys, impulses=impulses)
     os.replace("checkpoint.saving.npz", f"checkpoint.{n}.npz")
     checkpoint.seal(Path("."), "npz", n)
     checkpoint.prune(Path("."), "npz")
@@ -101,6 +102,8 @@ def load_checkpoint(scene: Scene, path: str) -> tuple[int, dict]:
     saved = np.load(path, allow_pickle=False)
     scene.position, scene.velocity, scene.spin = saved["position"].copy(), saved["velocity"].copy(), saved["spin"].copy()
     scene.walls.active = saved["active"].copy()
+    if "impulse_keys" in saved.files and len(saved["impulse_keys"]):  # the warm start of the next step
+        scene.impulses = (saved["impulse_keys"].copy(), saved["impulses"].copy())
     print(f"DEMORCH_RESUMED step {int(saved['step'])}", flush=True)
     return int(saved["step"]), json.loads(str(saved["stats"]))
 
@@ -115,7 +118,7 @@ def main(deck_path: str) -> None:
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None:
             removals.setdefault(int(wall["remove_step"]), []).append(k)
-    stats = {"contacts": [], "iterations": [], "solve_s": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
+    stats = {"contacts": [], "iterations": [], "solve_s": [], "primal": [], "dual": [], "gap": [], "missed": 0, "unresolved": 0, "smallest_gap": smallest_gap(scene), "wall_s": 0.0}
     first = 1
     if deck.get("resume"):
         done, stats = load_checkpoint(scene, deck["resume"])
@@ -131,6 +134,9 @@ def main(deck_path: str) -> None:
             stats["contacts"].append(result.contacts)
             stats["iterations"].append(result.iterations)
             stats["solve_s"].append(result.solve_s)
+            for measure in ("primal", "dual", "gap"):
+                value = getattr(result, measure)  # NaN (3D, or no contacts) is written as null
+                stats.setdefault(measure, []).append(None if value != value else value)
             stats["missed"] += result.missed
             stats["unresolved"] += result.unresolved
             if result.unresolved:

@@ -26,7 +26,7 @@ from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, 
 
 DECK_NAME = "cocd.json"
 FRAMES_NAME = "frames.npy"
-INSTALL_HINT = ".venv/bin/pip install clarabel scs piqp"
+INSTALL_HINT = ".venv/bin/pip install clarabel scs piqp cvxopt"
 
 
 def _progress(line: str) -> float | None:
@@ -77,7 +77,7 @@ class CocdAdapter(AdapterDefaults):
             "dt": schedule.dt,
             "total_steps": schedule.total_steps,
             "output_every": schedule.output_every,
-            "solver": case.cocd.solver,
+            "solver": case.cocd.resolved(case.planar),
             "tolerance": case.cocd.tolerance,
             "gravity": list(case.gravity),
             "planar": case.planar,

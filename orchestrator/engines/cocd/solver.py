@@ -20,7 +20,10 @@ would roll with ⅖ m r² and weigh ∝ r³.
 
 Masses are divided by their mean and the cone by Δt is already in velocity units, so the program is
 well scaled whatever the grain size. Solvers (called directly with scipy.sparse matrices): Clarabel
-(interior point, the reference), SCS (first order, for large 3D problems), PIQP (2D only: a QP).
+(interior point, the reference), SCS (first order, for large 3D problems), PIQP (2D only: a QP) and
+mehrotra (2D only: this package's interior point on the normal equations with CHOLMOD, warm-started
+from the previous step's impulses carried by contact identity; mehrotra.py), the 2D default
+(engine_sections.CocdSettings.resolved).
 """
 
 from __future__ import annotations
@@ -33,7 +36,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-SOLVERS = ("clarabel", "scs", "piqp")
+from orchestrator.engine_sections import COCD_PLANAR_ONLY as PLANAR_ONLY
+from orchestrator.engine_sections import COCD_SOLVERS as SOLVERS
+from orchestrator.engines.cocd import mehrotra
 
 
 @dataclass
@@ -70,6 +75,14 @@ class Scene:
     walls: Walls
     gravity: np.ndarray  # (3,)
     planar: bool  # 2D: motion in the x-z plane (unknowns vx, vz, r ω_y)
+    # the last step's contact keys (C,) and impulses (C, 2) in the solver's units, for a warm start (2D)
+    impulses: tuple[np.ndarray, np.ndarray] | None = None
+
+    def contact_keys(self, contacts: "Contacts") -> np.ndarray:
+        """One integer per contact naming its pair: body i against body j, or against wall k (j = -1 - k)."""
+        bodies = len(self.radius)
+        other = np.where(contacts.j >= 0, contacts.j, bodies - 1 - contacts.j)
+        return contacts.i.astype(np.int64) * (bodies + len(self.walls.names)) + other
 
 
 @dataclass
@@ -91,6 +104,10 @@ class StepStats:
     missed: int  # contacts found penetrating after the step that were not candidates (the step was redone)
     unresolved: int  # such contacts left after the last retry (the step went on with them)
     smallest_gap: float  # the smallest sphere/sphere gap after the step (negative: overlap)
+    # the answer's optimality measures (mehrotra.measures; 2D only, NaN in 3D or without contacts)
+    primal: float = math.nan
+    dual: float = math.nan
+    gap: float = math.nan
 
 
 def find_contacts(scene: Scene, dt: float, scale: float = 1.0) -> Contacts:
@@ -223,8 +240,14 @@ def mass_diagonal(scene: Scene, layout: Layout) -> np.ndarray:
 
 
 def solve(P: sp.csc_matrix, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, cones: list[int], linear: int, solver: str,
-          tolerance: float) -> tuple[np.ndarray, int]:
-    """min ½ xᵀPx + qᵀx  s.t.  A x + s = b, s in (`linear` nonnegative rows, then SOCs of the sizes in `cones`)."""
+          tolerance: float, warm: tuple[np.ndarray, np.ndarray] | None = None) -> mehrotra.Solution:
+    """min ½ xᵀPx + qᵀx  s.t.  A x + s = b, s in (`linear` nonnegative rows, then SOCs of the sizes in `cones`).
+
+    `warm` (x0, z0) is used by mehrotra only. The answer's measures are NaN where there are cones."""
+    if solver in PLANAR_ONLY and cones:
+        raise ValueError(f"{solver} solves 2D (planar) cases only: 3D cones are not linear")
+    if solver == "mehrotra":
+        return mehrotra.solve(P.diagonal(), q, A, b, tolerance, warm)
     if solver == "clarabel":
         import clarabel
 
@@ -235,8 +258,8 @@ def solve(P: sp.csc_matrix, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, cone
         result = clarabel.DefaultSolver(sp.triu(P).tocsc(), q, A, b, cone_list, settings).solve()
         if str(result.status) not in ("Solved", "AlmostSolved"):
             raise RuntimeError(f"Clarabel: {result.status}")
-        return np.asarray(result.x), int(result.iterations)
-    if solver == "scs":
+        x, z, iterations = np.asarray(result.x), np.asarray(result.z), int(result.iterations)
+    elif solver == "scs":
         import scs
 
         data = {"P": sp.triu(P).tocsc(), "A": A, "b": b, "c": q}
@@ -244,12 +267,10 @@ def solve(P: sp.csc_matrix, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, cone
         result = scs.SCS(data, cone, eps_abs=tolerance, eps_rel=tolerance, verbose=False).solve()
         if result["info"]["status"] not in ("solved", "solved_inaccurate"):
             raise RuntimeError(f"SCS: {result['info']['status']}")
-        return np.asarray(result["x"]), int(result["info"]["iter"])
-    if solver == "piqp":
+        x, z, iterations = np.asarray(result["x"]), np.asarray(result["y"]), int(result["info"]["iter"])
+    elif solver == "piqp":
         import piqp
 
-        if cones:
-            raise ValueError("piqp solves 2D (planar) cases only: 3D cones are not linear")
         engine = piqp.SparseSolver()
         engine.settings.eps_abs = engine.settings.eps_rel = tolerance
         engine.settings.verbose = False
@@ -257,8 +278,11 @@ def solve(P: sp.csc_matrix, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, cone
         status = engine.solve()
         if status.name not in ("PIQP_SOLVED",):
             raise RuntimeError(f"PIQP: {status}")
-        return np.asarray(engine.result.x), int(engine.result.info.iter)
-    raise ValueError(f"unknown solver {solver!r}; allowed: {', '.join(SOLVERS)}")
+        x, z, iterations = np.asarray(engine.result.x), np.asarray(engine.result.z_u), int(engine.result.info.iter)
+    else:
+        raise ValueError(f"unknown solver {solver!r}; allowed: {', '.join(SOLVERS)}")
+    measured = mehrotra.answer_measures(P.diagonal(), q, A, b, x, z) if not cones else (math.nan,) * 3
+    return mehrotra.Solution(x, z, iterations, *measured)
 
 
 def assemble(scene: Scene, layout: Layout, contacts: Contacts, dt: float) -> tuple[sp.csc_matrix, np.ndarray, list[int], int]:
@@ -298,11 +322,14 @@ def step(scene: Scene, dt: float, solver: str = "clarabel", tolerance: float = 1
     for _attempt in range(3):
         contacts = find_contacts(scene, dt, scale)
         A, b, cones, linear = assemble(scene, layout, contacts, dt)
+        keys = scene.contact_keys(contacts)
         started = time.perf_counter()
         if len(contacts.i):
-            u, iterations = solve(P, q, A, b, cones, linear, solver, tolerance)
+            answer = solve(P, q, A, b, cones, linear, solver, tolerance, _warm_start(scene, keys, u0) if solver == "mehrotra" else None)
+            u = answer.x
         else:
-            u, iterations = free, 0
+            answer = mehrotra.Solution(free, np.zeros(0), 0, math.nan, math.nan, math.nan)
+            u = free
         elapsed = time.perf_counter() - started
         v, w_new = layout.unpack(u)
         new_position = scene.position.copy()
@@ -314,11 +341,29 @@ def step(scene: Scene, dt: float, solver: str = "clarabel", tolerance: float = 1
         missed += lost
         scale *= 4.0
     unresolved = lost
+    if scene.planar:
+        scene.impulses = (keys, answer.z.reshape(2, -1).T.copy())
     scene.position = new_position
     scene.velocity[layout.mobile] = v
     scene.spin[layout.mobile] = w_new / scene.radius[layout.mobile, None]
     smallest = float(gap.min()) if len(gap) else math.inf
-    return StepStats(len(contacts.i), iterations, elapsed, missed - unresolved, unresolved, smallest)
+    return StepStats(len(contacts.i), answer.iterations, elapsed, missed - unresolved, unresolved, smallest,
+                     answer.primal, answer.dual, answer.gap)
+
+
+def _warm_start(scene: Scene, keys: np.ndarray, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(x0, z0) for mehrotra: this step's velocities and, per contact row, the impulse of the same pair
+    in the last step (0 for a new pair). None before a first 2D step."""
+    if scene.impulses is None or not scene.planar:
+        return None
+    known, impulses = scene.impulses
+    z = np.zeros((len(keys), 2))
+    if len(known):
+        order = np.argsort(known)
+        found = order[np.minimum(np.searchsorted(known, keys, sorter=order), len(known) - 1)]
+        same = known[found] == keys
+        z[same] = impulses[found[same]]
+    return u0, z.T.ravel()
 
 
 def _free_flight(u0: np.ndarray, scene: Scene, layout: Layout, dt: float) -> np.ndarray:
