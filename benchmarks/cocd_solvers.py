@@ -113,6 +113,7 @@ def exponents(rows: list[dict]) -> dict[str, float]:
 def plot(rows: list[dict], fitted: dict[str, float]) -> None:
     """Seconds per step against N (2D), log–log, each solver and the study's MOSEK points."""
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -124,6 +125,7 @@ def plot(rows: list[dict], fitted: dict[str, float]) -> None:
         axes.loglog(*zip(*points), "o-", label=label + ", 1 core")
     mosek = [run for run in load_reference()["collapse"]["martin2022"]["solver_cost"]["runs"] if run[0] < 100_000]
     axes.loglog([run[0] for run in mosek], [run[1] for run in mosek], "ks", label="MOSEK, Martin et al. 2022 (16 cores)")
+    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     axes.set_xlabel("grains N (2D)")
     axes.set_ylabel("solver seconds per step")
     axes.grid(True, which="both", alpha=0.3)

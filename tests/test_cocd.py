@@ -298,3 +298,15 @@ def test_a_2d_run_records_its_grains_as_discs(tmp_path: Path) -> None:
     mass = 2500.0 * math.pi * 0.002**2
     assert result.mass[0] == pytest.approx(mass, rel=1e-12)
     assert result.inertia[0].tolist() == pytest.approx([0.5 * mass * 0.002**2] * 3, rel=1e-12)
+
+
+def test_mehrotra_reports_an_infeasible_step_in_one_line() -> None:
+    """A step with no answer (x ≤ -1 and x ≥ 1) ends in one RuntimeError naming the solver, its
+    iterations and its three measures, warm-started or not (the warm failure falls back to cold)."""
+    from orchestrator.engines.cocd import mehrotra
+
+    A = sp.csc_matrix(np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]))
+    for warm in (None, (np.zeros(3), np.ones(2))):
+        with pytest.raises(RuntimeError, match=r"^mehrotra: (not converged after 80 iterations \(primal .*, dual .*, gap .*, tolerance 1e-08\)"
+                                               r"|the normal equations lost positive definiteness after \d+ iterations .*)$"):
+            mehrotra.solve(np.ones(3), np.zeros(3), A, np.array([-1.0, -1.0]), 1e-8, warm)

@@ -35,6 +35,7 @@ import scipy.sparse as sp
 
 MAX_ITERATIONS = 80
 STEP_TO_BOUNDARY = 0.99  # fraction of the largest step that keeps s, z > 0
+NEIGHBOURHOOD = 1e-3  # γ: every s_i z_i stays above γ × their mean (_centred)
 # z/s is capped: rows with s → 0 (a contact closed exactly, as in a static pile, where complementarity
 # is not strict) otherwise make the normal equations singular in double precision. Measured on a
 # 200-disc confined pile: uncapped, CHOLMOD failed at step 35; capped at 1e8, 1e10 or 1e12 all 200
@@ -53,6 +54,14 @@ class Solution:
     primal: float
     dual: float
     gap: float
+
+
+class NotConverged(RuntimeError):
+    """The iterations stopped short of the tolerance; `iterations` were spent."""
+
+    def __init__(self, message: str, iterations: int):
+        super().__init__(message)
+        self.iterations = iterations
 
 
 class NormalEquations:
@@ -143,6 +152,21 @@ def answer_measures(p: np.ndarray, q: np.ndarray, A: sp.spmatrix, b: np.ndarray,
     return measures(p, q, b, x, s, z, np.minimum(slack, 0.0) * -1.0, p * x + q + A.T @ z)
 
 
+def _centred(s: np.ndarray, z: np.ndarray, ds: np.ndarray, dz: np.ndarray, alpha: float) -> float:
+    """α shortened (by 10 % at a time, 30 times at most) until every product s_i z_i at the new point
+    is at least NEIGHBOURHOOD × their mean: the wide neighbourhood of path-following methods
+    (Nocedal & Wright 2006, §14.1). Without it a row's s can reach 1e-20 long before the others
+    converge and block every later step. Measured 2026-12-04 on a step of the 22° collapse on a 5 mm bed
+    that stalled warm-started (80 iterations, primal 9e-8): γ = 1e-5, 1e-4, 1e-3 converge in 62, 59,
+    40 iterations (cold: 35); recorded column steps and a static pile take as many as without."""
+    for _ in range(30):
+        products = (s + alpha * ds) * (z + alpha * dz)
+        if products.min() >= NEIGHBOURHOOD * products.mean():
+            break
+        alpha *= 0.9
+    return alpha
+
+
 def _largest_step(v: np.ndarray, dv: np.ndarray) -> float:
     """The largest α ≤ 1 with v + α dv ≥ 0 (v > 0)."""
     negative = dv < 0
@@ -154,13 +178,28 @@ def solve(p: np.ndarray, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, toleran
     """Minimise ½ xᵀ diag(p) x + qᵀx subject to A x ≤ b; p (n,) > 0, A (m × n), b (m,), the unknowns
     in groups of `block` per body and each row of A touching at most two bodies (NormalEquations).
 
-    `warm`: (x0 (n,), z0 (m,)) from the previous step. Raises RuntimeError when the measures are not
-    met within MAX_ITERATIONS, or when CHOLMOD finds the normal equations not positive definite.
+    `warm`: (x0 (n,), z0 (m,)) from the previous step; if the warm-started run fails, the problem is
+    solved again from the cold start (the iterations of both are counted). Raises RuntimeError when
+    the measures are not met within MAX_ITERATIONS from the cold start, or when CHOLMOD finds the
+    normal equations not positive definite.
     """
     A = A.tocsr()
+    normal = NormalEquations(p, A, block)
+    if warm is not None:
+        try:
+            return _iterate(p, q, A, b, tolerance, normal, warm)
+        except NotConverged as failure:
+            cold = _iterate(p, q, A, b, tolerance, normal, None)
+            cold.iterations += failure.iterations
+            return cold
+    return _iterate(p, q, A, b, tolerance, normal, None)
+
+
+def _iterate(p: np.ndarray, q: np.ndarray, A: sp.csr_matrix, b: np.ndarray, tolerance: float, normal: NormalEquations,
+             warm: tuple[np.ndarray, np.ndarray] | None) -> Solution:
+    """Mehrotra's iterations from the cold start (warm None) or from (x0, z0)."""
     At = A.T.tocsr()
     m = A.shape[0]
-    normal = NormalEquations(p, A, block)
     if warm is None:
         normal.refactor(np.ones(m))
         x = normal.solve(At @ b - q)
@@ -185,7 +224,8 @@ def solve(p: np.ndarray, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, toleran
         try:
             normal.refactor(d)
         except ArithmeticError as error:
-            raise RuntimeError(f"mehrotra: the normal equations lost positive definiteness at iteration {iteration} ({error})") from None
+            raise NotConverged(f"mehrotra: the normal equations lost positive definiteness after {iteration} iterations ({error})",
+                               iteration) from None
 
         def direction(complementarity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             dx = normal.solve(-dual_residual - At @ (d * primal_residual - complementarity / s))
@@ -197,6 +237,7 @@ def solve(p: np.ndarray, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, toleran
         sigma = (float((s + alpha * ds) @ (z + alpha * dz)) / m / mu) ** 3
         dx, ds, dz = direction(s * z - sigma * mu + ds * dz)
         alpha = min(1.0, STEP_TO_BOUNDARY * min(_largest_step(s, ds), _largest_step(z, dz)))
+        alpha = _centred(s, z, ds, dz, alpha)
         x, s, z = x + alpha * dx, s + alpha * ds, z + alpha * dz
-    raise RuntimeError(f"mehrotra: not converged in {MAX_ITERATIONS} iterations (primal {primal:.1e}, dual {dual:.1e}, "
-                       f"gap {relative_gap:.1e}, tolerance {tolerance:.0e})")
+    raise NotConverged(f"mehrotra: not converged after {MAX_ITERATIONS} iterations (primal {primal:.1e}, dual {dual:.1e}, "
+                       f"gap {relative_gap:.1e}, tolerance {tolerance:.0e})", MAX_ITERATIONS)
