@@ -17,7 +17,7 @@ from pydantic import Field, field_validator, model_validator
 
 from orchestrator.bodies import Bodies, BrickShape, Clump, Sphere  # noqa: F401  (re-exported: the case's sections)
 from orchestrator.capabilities import DEFAULT_ENGINE, ENGINE_NAMES, Engine, capabilities
-from orchestrator.engine_sections import COCD_PLANAR_ONLY, COCD_SOLVERS, EngineSections
+from orchestrator.engine_sections import EngineSections
 from orchestrator.fields import (Acceleration, AngularVelocity, Coordinate, Name, Position, QuaternionPart, Real,  # noqa: F401  (re-exported)
                                  Speed, Spin, Strict, Velocity)
 from orchestrator.validation import CaseError, parse_model, read_yaml  # noqa: F401  (CaseError re-exported)
@@ -277,9 +277,9 @@ def engine_limits(case: Case) -> str | None:
     for field, used, capability, reason in checks:
         if used and not getattr(can, capability):
             return f"{field}: {reason}; engines that can: {', '.join(engines_with(**{capability: True}))}"
-    if engine == "cocd" and not case.planar and case.cocd.solver in COCD_PLANAR_ONLY:
-        allowed = [name for name in ("auto", *COCD_SOLVERS) if name not in COCD_PLANAR_ONLY]
-        return f"cocd.solver: {case.cocd.solver} solves 2D cases only (planar: true); allowed in 3D: {', '.join(allowed)}"
+    section = case.section_limits(engine, case.planar)
+    if section:
+        return section
     used_kinds = {case.shape(c.shape).kind for c in case.bodies.clumps}
     for i, shape in enumerate(case.shapes):
         if shape.kind in used_kinds and shape.kind not in can.shape_kinds:

@@ -44,6 +44,13 @@ class EngineSections(_Section):
         """The engine-only sections as data, to carry from a study into the cases it makes."""
         return {name: getattr(self, name).model_dump() for name in EngineSections.model_fields}
 
+    def section_limits(self, engine: str, planar: bool) -> str | None:
+        """What the engine's own section asks that this case cannot give, as `field: reason; allowed: …`."""
+        if engine == "cocd" and not planar and self.cocd.solver in COCD_PLANAR_ONLY:
+            allowed = [name for name in ("auto", *COCD_SOLVERS) if name not in COCD_PLANAR_ONLY]
+            return f"cocd.solver: {self.cocd.solver} solves 2D cases only (planar: true); allowed in 3D: {', '.join(allowed)}"
+        return None
+
 
 class StudyEngineSections(EngineSections):
     """A study's engine-only sections: those of its cases, and the step of an implicit engine."""
