@@ -93,15 +93,22 @@ class NormalEquations:
         a, b = first + a, first + b
         i, j = A.indices[a], A.indices[b]
         upper_body, lower_body = i // block, j // block  # i ≥ j, so upper_body ≥ lower_body
-        # the body-level pattern below the diagonal: the distinct (column body, row body) pairs
-        pairs = np.unique(lower_body[upper_body > lower_body].astype(np.int64) * bodies + upper_body[upper_body > lower_body])
+        # each row's two bodies (one for a wall contact): the body-level pattern below the diagonal
+        # is their distinct pairs (column body, row body)
+        row_low, row_high = np.zeros(m, np.int64), np.zeros(m, np.int64)
+        filled = count > 0
+        if filled.any():
+            row_low[filled] = np.minimum.reduceat(A.indices, A.indptr[:-1][filled]) // block
+            row_high[filled] = np.maximum.reduceat(A.indices, A.indptr[:-1][filled]) // block
+        row_key = row_low.astype(np.int64) * bodies + row_high
+        pairs = np.unique(row_key[row_high > row_low])
         below = np.bincount(pairs // bodies, minlength=bodies)  # neighbour blocks below each body's diagonal block
         start = np.cumsum(below) - below
         # column c = block·B + β holds (block − β) entries of the diagonal block, then `block` per neighbour
         beta = np.tile(np.arange(block), bodies)
         length = (block - beta) + block * np.repeat(below, block)
         pointer = np.concatenate([[0], np.cumsum(length)])
-        k = np.searchsorted(pairs, lower_body.astype(np.int64) * bodies + upper_body) - start[lower_body]
+        k = (np.searchsorted(pairs, row_key) - start[row_low])[row]
         place = pointer[j] + np.where(upper_body == lower_body, i - j, (block - j % block) + block * k + i % block)
         self.weights = sp.csc_matrix((A.data[a] * A.data[b], place, np.concatenate([[0], np.cumsum(np.bincount(row, minlength=m))])),
                                      shape=(int(pointer[-1]), m))
@@ -118,7 +125,8 @@ class NormalEquations:
         if len(neighbours):
             neighbour = neighbours[np.minimum(start[column_body] + slot // block, len(neighbours) - 1)]
         rows = np.where(in_diagonal, column + offset, block * neighbour + slot % block)
-        self.matrix = cvxopt.spmatrix(np.ones(int(pointer[-1])), rows.tolist(), column.tolist(), (n, n))
+        self.matrix = cvxopt.spmatrix(cvxopt.matrix(np.ones(int(pointer[-1]))), cvxopt.matrix(rows.astype(np.int64)),
+                                      cvxopt.matrix(column.astype(np.int64)), (n, n))
         cholmod.options["supernodal"] = 2
         self.factor = cholmod.symbolic(self.matrix, uplo="L")
 
