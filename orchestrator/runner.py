@@ -131,6 +131,9 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         bodies=trajectory.n_bodies,
         metrics=summary.summary(trajectory),
     )
+    engine_summary = adapter.engine_summary(plan, directory)
+    if engine_summary:
+        record.update(engine_summary=engine_summary)
     if lost:
         record.update(lost_bodies=lost["lost_bodies"], warnings=[*record.get("warnings", []), lost["warning"]])
     rundir.write_record(directory, record)

@@ -142,7 +142,8 @@ def test_friction_changes_the_runout(collapses: dict) -> None:
 @pytest.mark.engine
 def test_the_default_2d_solver_records_iterations_and_measures_within_its_tolerance(collapses: dict) -> None:
     """A 2D collapse runs on mehrotra (the 2D default): every step with contacts records its
-    iterations and its three optimality measures, each within the case's tolerance (1e-8)."""
+    iterations and its three optimality measures, each within the case's tolerance (1e-8); run.json
+    sums them up."""
     report, directory = collapses[0.3]
     deck = json.loads((directory / "run" / "cocd.json").read_text())
     assert deck["solver"] == "mehrotra"
@@ -152,6 +153,10 @@ def test_the_default_2d_solver_records_iterations_and_measures_within_its_tolera
     for measure in ("primal", "dual", "gap"):
         assert max(stats[measure][k] for k in solved) <= deck["tolerance"], measure
     assert 5 <= np.mean([stats["iterations"][k] for k in solved]) <= 40
+    summary = json.loads((directory / "run" / "run.json").read_text())["engine_summary"]
+    assert summary["solver"] == "mehrotra" and summary["steps_with_contacts"] == len(solved)
+    assert summary["iterations"]["max"] == max(stats["iterations"][k] for k in solved)
+    assert max(summary["primal_max"], summary["dual_max"], summary["gap_max"]) <= deck["tolerance"]
 
 
 @pytest.mark.engine

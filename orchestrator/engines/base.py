@@ -112,6 +112,10 @@ class EngineAdapter(Protocol):
         (engines.checkpoint; whether each still matches its seal is checked by the caller)."""
         ...
 
+    def engine_summary(self, plan: RunPlan, rundir: Path) -> dict[str, object]:
+        """What the engine reports of a finished run beyond its frames (run.json's `engine_summary`; {}: nothing)."""
+        ...
+
 
 class AdapterDefaults:
     """What most adapters share: the run options kept for checkpoints, the code that makes the deck
@@ -129,6 +133,9 @@ class AdapterDefaults:
 
     def warnings(self, plan: RunPlan) -> tuple[str, ...]:
         return ()
+
+    def engine_summary(self, plan: RunPlan, rundir: Path) -> dict[str, object]:
+        return {}
 
     def checkpoint_steps(self, plan: RunPlan) -> int | None:
         """Steps between checkpoints for this plan (None: none), from the run options."""

@@ -20,6 +20,8 @@ import numpy as np
 from orchestrator.engines import checkpoint
 from orchestrator.engines.cocd.solver import Scene, Walls, disc_mass, smallest_gap, step
 
+STATS_NAME = "cocd_stats.json"
+
 
 def load_scene(deck: dict) -> Scene:
     """The deck's scene; in 2D (planar) each grain becomes the disc of its radius (solver.disc_mass:
@@ -154,7 +156,7 @@ def main(deck_path: str) -> None:
             if checkpoint_every and n % checkpoint_every == 0 and n < total:
                 save_checkpoint(scene, n, stats)
     stats["wall_s"] = time.perf_counter() - started
-    Path("cocd_stats.json").write_text(json.dumps(stats) + "\n")
+    Path(STATS_NAME).write_text(json.dumps(stats) + "\n")
     print(f"DEMORCH_STATS steps {total} wall {stats['wall_s']:.2f} s smallest gap {stats['smallest_gap']:.3e} m missed-and-redone {stats['missed']} unresolved {stats['unresolved']}")
     print("DEMORCH_DONE", flush=True)
 

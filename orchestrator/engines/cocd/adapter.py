@@ -21,6 +21,7 @@ from orchestrator.plan import RunPlan
 from orchestrator.results import Trajectory
 from orchestrator.engines import common
 from orchestrator.engines.checkpoint import segment_name
+from orchestrator.engines.cocd.__main__ import STATS_NAME
 from orchestrator.engines.cocd.solver import DISC_INERTIA
 from orchestrator.engines.base import AdapterDefaults, EngineError, EngineInfo, ProgressCallback, run_engine
 
@@ -103,6 +104,26 @@ class CocdAdapter(AdapterDefaults):
                           failure_markers=("ERROR", "Traceback"), log_name=self.log_name(plan))
         if not any(line.startswith("DEMORCH_DONE") for line in tail):
             raise EngineError("cocd ended without finishing", deck, rundir / self.log_name(plan), tail)
+
+    def engine_summary(self, plan: RunPlan, rundir: Path) -> dict[str, object]:
+        """The solver's record over the run's steps (every segment; per step in cocd_stats.json): its
+        name, the steps with contacts, iterations (mean, max), solver seconds and, in 2D, the largest
+        of each optimality measure (solver.StepStats)."""
+        try:
+            stats = json.loads((rundir / STATS_NAME).read_text())
+        except (OSError, ValueError):
+            return {}
+        solved = [k for k, count in enumerate(stats["contacts"]) if count]
+        summary: dict[str, object] = {"solver": plan.case.cocd.resolved(plan.case.planar), "per_step": STATS_NAME,
+                                      "steps_with_contacts": len(solved), "solver_seconds": float(sum(stats["solve_s"]))}
+        if solved:
+            iterations = [stats["iterations"][k] for k in solved]
+            summary["iterations"] = {"mean": float(np.mean(iterations)), "max": int(max(iterations))}
+            for measure in ("primal", "dual", "gap"):
+                values = [stats[measure][k] for k in solved if stats.get(measure) and stats[measure][k] is not None]
+                if values:
+                    summary[f"{measure}_max"] = float(max(values))
+        return summary
 
     def read_output(self, plan: RunPlan, rundir: Path) -> Trajectory:
         trajectory = common.frame_stream_trajectory(plan, rundir, FRAMES_NAME, rundir / DECK_NAME, "cocd", orientation_tracked=False)
