@@ -44,8 +44,8 @@ class CocdAdapter(AdapterDefaults):
     checkpoint_ext = "npz"  # checkpoint.<step>.npz: the scene's arrays
 
     def info(self) -> EngineInfo:
-        try:
-            version = "clarabel " + metadata.version("clarabel")
+        try:  # the solvers' libraries: Clarabel (3D default) and cvxopt's CHOLMOD (mehrotra, the 2D default)
+            version = f"clarabel {metadata.version('clarabel')}, cvxopt {metadata.version('cvxopt')}"
         except metadata.PackageNotFoundError:
             version = None
         return EngineInfo(name="cocd", executable=sys.executable, version=version, install_hint=INSTALL_HINT)
