@@ -167,10 +167,10 @@ def test_mehrotra_and_clarabel_give_the_same_collapse(collapses: dict) -> None:
     1e-5 m after 0.05 s, a grain's size after 0.1 s, for either solver), so no two solvers give the
     same grains for long. What must hold: frame by frame over the first 0.05 s mehrotra stays at
     most twice as far from the reference as the reference solver itself at the same tolerance
-    (measured: 0.4–0.9 times), and the runouts, once chaos has had its way, differ from the
-    reference's by no more than Clarabel's own does plus one slice of the front's grid (1 mm).
-    (Measured on this column: runouts 0.070–0.076 m over Clarabel at 1e-8 and 1e-10, PIQP and
-    mehrotra: a single 600-grain release is not reproducible to 1 %.)"""
+    (measured: 0.4–0.9 times), and the runout, once chaos has had its way, lies within the two
+    Clarabel runs' range widened by two slices of the front's grid (2 mm). (Measured on this column:
+    runouts 0.070–0.076 m over Clarabel at 1e-8 and 1e-10, PIQP and mehrotra at 1e-8 and 1e-10: a
+    single 600-grain release is not reproducible to 1 %.)"""
     keys = {"mehrotra": 0.3, "clarabel": "clarabel", "tight": "clarabel_tight"}
     runs = {name: read_results(collapses[key][1] / "run" / "results.h5") for name, key in keys.items()}
     for frame in range(1, 6):
@@ -178,7 +178,8 @@ def test_mehrotra_and_clarabel_give_the_same_collapse(collapses: dict) -> None:
         yardstick = np.abs(runs["clarabel"].position[frame] - runs["tight"].position[frame]).max()
         assert ours <= 2.0 * yardstick, (frame, ours, yardstick)
     runout = {name: collapses[key][0]["runout"] for name, key in keys.items()}
-    assert abs(runout["mehrotra"] - runout["tight"]) <= abs(runout["clarabel"] - runout["tight"]) + 1.0e-3 + 1e-12, runout
+    low, high = sorted((runout["clarabel"], runout["tight"]))
+    assert low - 2.0e-3 - 1e-12 <= runout["mehrotra"] <= high + 2.0e-3 + 1e-12, runout
 
 
 def _frame_scene(run: Path, frame: int) -> tuple[Scene, float]:
