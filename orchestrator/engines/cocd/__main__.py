@@ -2,9 +2,11 @@
 
 Writes the deck's frame stream (frames.npy, the YADE adapter's format: time, then an (N, 16) array
 per frame), cocd_stats.json (per step: contacts, solver iterations and seconds, and in 2D the
-answer's relative primal and dual residuals and duality gap; the smallest gap seen), and prints `DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end. With the
-deck's `checkpoint_every`, the scene's arrays are saved every so many steps as
-checkpoint.<step>.npz (the two newest kept); with `resume`, the run continues from such a file.
+answer's relative primal and dual residuals and duality gap; the smallest gap seen), and prints
+`DEMORCH_T <time>` lines for progress and `DEMORCH_DONE` at the end. With the deck's
+`checkpoint_every`, the scene's arrays (and, in 2D, the last step's impulses by contact, the warm start)
+are saved every so many steps as checkpoint.<step>.npz (the two newest kept); with `resume`, the
+run continues from such a file.
 """
 
 from __future__ import annotations
