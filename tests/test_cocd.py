@@ -186,11 +186,10 @@ def _frame_scene(run: Path, frame: int) -> tuple[Scene, float]:
     """The scene of a cocd run at one of its frames (the deck's bodies at that frame's state) and the step."""
     deck = json.loads((run / "cocd.json").read_text())
     scene = load_scene(deck)
-    with open(run / deck["frames"], "rb") as stream:
-        for _ in range(frame + 1):
-            now, rows = float(np.load(stream)[0]), np.load(stream)
-    scene.position, scene.velocity, scene.spin = rows[:, 3:6].copy(), rows[:, 6:9].copy(), rows[:, 9:12].copy()
-    step_number = round(now / deck["dt"])
+    recorded = read_results(run / "results.h5")
+    scene.position = recorded.position[frame].copy()
+    scene.velocity, scene.spin = recorded.velocity[frame].copy(), recorded.angular_velocity[frame].copy()
+    step_number = round(float(recorded.time[frame]) / deck["dt"])
     for k, wall in enumerate(deck["walls"]):
         if wall["remove_step"] is not None and wall["remove_step"] < step_number:
             scene.walls.active[k] = False

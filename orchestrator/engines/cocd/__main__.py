@@ -140,7 +140,7 @@ def main(deck_path: str) -> None:
             stats["solve_s"].append(result.solve_s)
             for measure in ("primal", "dual", "gap"):
                 value = getattr(result, measure)  # NaN (3D, or no contacts) is written as null
-                stats.setdefault(measure, []).append(None if value != value else value)
+                stats[measure].append(None if value != value else value)
             stats["missed"] += result.missed
             stats["unresolved"] += result.unresolved
             if result.unresolved:

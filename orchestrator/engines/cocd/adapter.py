@@ -120,7 +120,7 @@ class CocdAdapter(AdapterDefaults):
             iterations = [stats["iterations"][k] for k in solved]
             summary["iterations"] = {"mean": float(np.mean(iterations)), "max": int(max(iterations))}
             for measure in ("primal", "dual", "gap"):
-                values = [stats[measure][k] for k in solved if stats.get(measure) and stats[measure][k] is not None]
+                values = [stats[measure][k] for k in solved if stats[measure][k] is not None]
                 if values:
                     summary[f"{measure}_max"] = float(max(values))
         return summary

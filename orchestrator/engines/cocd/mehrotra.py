@@ -100,7 +100,7 @@ class NormalEquations:
         if filled.any():
             row_low[filled] = np.minimum.reduceat(A.indices, A.indptr[:-1][filled]) // block
             row_high[filled] = np.maximum.reduceat(A.indices, A.indptr[:-1][filled]) // block
-        row_key = row_low.astype(np.int64) * bodies + row_high
+        row_key = row_low * bodies + row_high
         pairs = np.unique(row_key[row_high > row_low])
         below = np.bincount(pairs // bodies, minlength=bodies)  # neighbour blocks below each body's diagonal block
         start = np.cumsum(below) - below
@@ -125,8 +125,7 @@ class NormalEquations:
         if len(neighbours):
             neighbour = neighbours[np.minimum(start[column_body] + slot // block, len(neighbours) - 1)]
         rows = np.where(in_diagonal, column + offset, block * neighbour + slot % block)
-        self.matrix = cvxopt.spmatrix(cvxopt.matrix(np.ones(int(pointer[-1]))), cvxopt.matrix(rows.astype(np.int64)),
-                                      cvxopt.matrix(column.astype(np.int64)), (n, n))
+        self.matrix = cvxopt.spmatrix(cvxopt.matrix(np.ones(int(pointer[-1]))), cvxopt.matrix(rows), cvxopt.matrix(column), (n, n))
         cholmod.options["supernodal"] = 2
         self.factor = cholmod.symbolic(self.matrix, uplo="L")
 
@@ -192,21 +191,21 @@ def solve(p: np.ndarray, q: np.ndarray, A: sp.csc_matrix, b: np.ndarray, toleran
     normal equations not positive definite.
     """
     A = A.tocsr()
+    At = A.T.tocsr()
     normal = NormalEquations(p, A, block)
     if warm is not None:
         try:
-            return _iterate(p, q, A, b, tolerance, normal, warm)
+            return _iterate(p, q, A, At, b, tolerance, normal, warm)
         except NotConverged as failure:
-            cold = _iterate(p, q, A, b, tolerance, normal, None)
+            cold = _iterate(p, q, A, At, b, tolerance, normal, None)
             cold.iterations += failure.iterations
             return cold
-    return _iterate(p, q, A, b, tolerance, normal, None)
+    return _iterate(p, q, A, At, b, tolerance, normal, None)
 
 
-def _iterate(p: np.ndarray, q: np.ndarray, A: sp.csr_matrix, b: np.ndarray, tolerance: float, normal: NormalEquations,
-             warm: tuple[np.ndarray, np.ndarray] | None) -> Solution:
-    """Mehrotra's iterations from the cold start (warm None) or from (x0, z0)."""
-    At = A.T.tocsr()
+def _iterate(p: np.ndarray, q: np.ndarray, A: sp.csr_matrix, At: sp.csr_matrix, b: np.ndarray, tolerance: float,
+             normal: NormalEquations, warm: tuple[np.ndarray, np.ndarray] | None) -> Solution:
+    """Mehrotra's iterations from the cold start (warm None) or from (x0, z0); At is Aᵀ."""
     m = A.shape[0]
     if warm is None:
         normal.refactor(np.ones(m))
