@@ -123,9 +123,20 @@ inline void relativeVertices(const Box &A, const Box &B, Pose &p)
     }
 }
 
+/* Whether a point (coordinates u in a box's frame) lies inside the box, to 1e-9 of its half extents. */
+inline bool insideBox(const double *u, const double *h)
+{
+  for (int k = 0; k < 3; k++)
+    if (std::fabs(u[k]) > h[k] * (1.0 + 1e-9)) return false;
+  return true;
+}
+
 /* A vertex (coordinates u in the frame of box `other`) against that box. `flip`: the vertex belongs
  * to B and `other` is A (the normal then points from A's closest point to the vertex, reversed to
- * keep "from B to A"). */
+ * keep "from B to A"). A vertex inside the other inner box (an overlap beyond r_A + r_B: an impact
+ * faster than the stiffness holds) is pushed out through the nearest face, its overlap r_A + r_B
+ * plus its depth under that face: the force keeps growing, continuous with the outside, and keeps
+ * the vertex's history. */
 inline bool vertexAgainstBox(const double *u, double r_vertex, const Box &other, bool flip, int key, SubContact &out)
 {
   const double reach = r_vertex + other.r;
@@ -134,11 +145,22 @@ inline bool vertexAgainstBox(const double *u, double r_vertex, const Box &other,
   const double gap[3] = { u[0] - clamped[0], u[1] - clamped[1], u[2] - clamped[2] };
   const double squared = dot(gap, gap);
   if (squared >= reach * reach) return false;
-  const double distance = std::sqrt(squared);
-  if (distance <= 1e-12 * reach) return false;  // inner boxes interpenetrating
+  double distance = std::sqrt(squared);
   double q[3], direction[3];  // the closest point (world), the unit direction from it to the vertex
-  toWorld(other, clamped, q);
-  for (int i = 0; i < 3; i++) direction[i] = (other.R[i][0] * gap[0] + other.R[i][1] * gap[1] + other.R[i][2] * gap[2]) / distance;
+  if (distance > 1e-12 * reach) {
+    toWorld(other, clamped, q);
+    for (int i = 0; i < 3; i++) direction[i] = (other.R[i][0] * gap[0] + other.R[i][1] * gap[1] + other.R[i][2] * gap[2]) / distance;
+  } else {  // inside the inner box: the nearest face
+    int face = 0;
+    for (int k = 1; k < 3; k++)
+      if (other.h[k] - std::fabs(u[k]) < other.h[face] - std::fabs(u[face])) face = k;
+    const double side = u[face] < 0.0 ? -1.0 : 1.0;
+    distance = std::fabs(u[face]) - other.h[face];  // <= 0: the depth under the face, negative
+    double on_face[3] = { u[0], u[1], u[2] };
+    on_face[face] = side * other.h[face];
+    toWorld(other, on_face, q);
+    for (int i = 0; i < 3; i++) direction[i] = side * other.R[i][face];
+  }
   const double sign = flip ? -1.0 : 1.0;
   out.key = key;
   out.overlap = reach - distance;
@@ -230,7 +252,15 @@ inline bool edgeAgainstEdge(const Box &A, int ea, const Box &B, int eb, const Po
     for (int i = 0; i < 3; i++) n[i] = -n[i];
     gap = -gap;
   }
-  if (gap >= reach || gap <= 1e-12 * reach) return false;
+  if (gap >= reach) return false;
+  if (gap <= 1e-12 * reach) {
+    // the inner edges crossed (an overlap beyond r_A + r_B): a real crossing puts each closest point
+    // inside the other inner box; otherwise the two edges face each other across a body, no contact
+    double pa_in_b[3];
+    for (int j = 0; j < 3; j++)
+      pa_in_b[j] = p.R[0][j] * (pa[0] - p.t[0]) + p.R[1][j] * (pa[1] - p.t[1]) + p.R[2][j] * (pa[2] - p.t[2]);
+    if (!insideBox(pb, A.h) || !insideBox(pa_in_b, B.h)) return false;
+  }
   out.key = key;
   out.overlap = reach - gap;
   double point[3];
@@ -359,23 +389,32 @@ inline int boxTriangleContacts(const Box &A, const Triangle &tri, SubContact *ou
   if (std::fabs(dot(centre, tri.unit)) >= bound) return 0;  // farther from the triangle's plane than the body reaches
   for (int i = 0; i < 3; i++)
     if (A.c[i] + bound <= tri.lo[i] || A.c[i] - bound >= tri.hi[i]) return 0;  // beside the triangle
+  // the wall pushes towards the side the box's centre is on: a vertex driven past the plane (an
+  // overlap beyond r) is pushed back, not through
+  const double side = dot(centre, tri.unit) < 0.0 ? -1.0 : 1.0;
   int n = 0;
   double p[3], q[3];
   for (int v = 0; v < 8; v++) {
     vertex(A, v, p);
     const double ap[3] = { p[0] - tri.a[0], p[1] - tri.a[1], p[2] - tri.a[2] };
-    if (std::fabs(dot(ap, tri.unit)) >= A.r) continue;  // out of reach of the plane
+    const double height = side * dot(ap, tri.unit);  // of the vertex above the plane, on the centre's side
+    if (height >= A.r) continue;  // out of reach of the plane
     if (!projectOnTriangle(p, tri, q)) continue;
     const double d[3] = { p[0] - q[0], p[1] - q[1], p[2] - q[2] };
-    const double distance = std::sqrt(dot(d, d));
-    if (distance >= A.r || distance <= 1e-12 * A.r) continue;
+    double distance = height;
+    double normal[3];
+    if (height > 1e-12 * A.r) {
+      distance = std::sqrt(dot(d, d));
+      if (distance >= A.r) continue;
+      for (int i = 0; i < 3; i++) normal[i] = d[i] / distance;
+    } else {  // on or past the plane
+      for (int i = 0; i < 3; i++) normal[i] = side * tri.unit[i];
+    }
     SubContact &s = out[n++];
     s.key = v;
+    for (int i = 0; i < 3; i++) s.normal[i] = normal[i];
     s.overlap = A.r - distance;
-    for (int i = 0; i < 3; i++) {
-      s.normal[i] = d[i] / distance;
-      s.point[i] = q[i] - 0.5 * s.overlap * s.normal[i];
-    }
+    for (int i = 0; i < 3; i++) s.point[i] = q[i] - 0.5 * s.overlap * s.normal[i];
   }
   return n;
 }

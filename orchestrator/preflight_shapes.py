@@ -25,6 +25,7 @@ from scipy.spatial import cKDTree
 from orchestrator.case import Case, CaseError
 from orchestrator.shapes import BodyShape
 from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.overlap import box_overlap, pair_overlap
 
 OVERLAP_TOLERANCE = 0.05  # of the smallest half extent of the shapes involved
 CHUNK = 2048  # pairs measured at once (bounds the memory: pairs × probes × the other's spheres)
@@ -67,39 +68,13 @@ def _check_pairs(shapes: list[BodyShape], centres: np.ndarray, rotations: np.nda
     for members in groups.values():
         chosen = pairs[members]
         a, b = shapes[chosen[0, 0]], shapes[chosen[0, 1]]
-        depth = np.concatenate([np.maximum(_depth(a, b, part[:, 0], part[:, 1], centres, rotations),
-                                           _depth(b, a, part[:, 1], part[:, 0], centres, rotations))
+        depth = np.concatenate([pair_overlap(a, b, centres[part[:, 0]], rotations[part[:, 0]], centres[part[:, 1]], rotations[part[:, 1]])
                                 for part in np.array_split(chosen, max(1, -(-len(chosen) // CHUNK)))])
         worst = int(np.argmax(depth))
         if depth[worst] > _tolerance(a, b):
             i, j = (int(v) for v in chosen[worst])
             raise CaseError(f"bodies.clumps.{j}.position: body {j} overlaps body {i} by {depth[worst]:.3g} m "
                             f"({int((depth > _tolerance(a, b)).sum())} overlapping pairs); bodies may touch, not overlap")
-
-
-def box_overlap(ca: np.ndarray, ra: np.ndarray, ha: np.ndarray, cb: np.ndarray, rb: np.ndarray, hb: np.ndarray) -> np.ndarray:
-    """(p,) penetration depth of pairs of oriented boxes (m; ≤ 0: apart): the least overlap of their
-    projections on the 15 separating axes (the 3 + 3 face normals and the 9 edge cross products;
-    Gottschalk et al. 1996). Centres (p, 3), rotations (p, 3, 3) body → world, half extents (p, 3)."""
-    axes_a, axes_b = np.swapaxes(ra, 1, 2), np.swapaxes(rb, 1, 2)  # (p, 3 axes, 3)
-    crosses = np.cross(axes_a[:, :, None, :], axes_b[:, None, :, :]).reshape(-1, 9, 3)
-    axes = np.concatenate([axes_a, axes_b, crosses], axis=1)  # (p, 15, 3)
-    length = np.linalg.norm(axes, axis=2)
-    usable = length > 1e-9  # parallel edges give no axis
-    axes = axes / np.where(usable, length, 1.0)[:, :, None]
-    reach_a = np.abs(np.einsum("pak,pik->pai", axes, axes_a)) @ ha[:, :, None]
-    reach_b = np.abs(np.einsum("pak,pik->pai", axes, axes_b)) @ hb[:, :, None]
-    gap = np.abs(np.einsum("pak,pk->pa", axes, cb - ca))
-    overlap = reach_a[..., 0] + reach_b[..., 0] - gap
-    return np.where(usable, overlap, np.inf).min(axis=1)
-
-
-def _depth(a: BodyShape, b: BodyShape, i: np.ndarray, j: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """(p,) deepest reach of body a's probes (bodies i) into body b (bodies j), m."""
-    points, radii = a.probes
-    world = np.einsum("pkl,vl->pvk", rotations[i], points) + centres[i][:, None, :]
-    local = np.einsum("plk,pvl->pvk", rotations[j], world - centres[j][:, None, :])  # Rᵀ (x − c)
-    return (b.penetration(local.reshape(-1, 3)).reshape(len(i), -1) + radii[None, :]).max(axis=1)
 
 
 def _check_wall(name: str, shapes: list[BodyShape], centres: np.ndarray, rotations: np.ndarray, fixed: np.ndarray,

@@ -22,7 +22,7 @@ from orchestrator.engines import checkpoint
 from orchestrator.engines.base import LOG_NAME, TAIL_LINES, ProgressCallback, log_tail
 from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
-from orchestrator.post import summary
+from orchestrator.post import overlaps, summary
 from orchestrator.post.lost import drop_lost, lost_bodies
 from orchestrator.results import RESULTS, RUN_RECORD, Trajectory, write_results
 
@@ -136,6 +136,12 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
         record.update(engine_summary=engine_summary)
     if lost:
         record.update(lost_bodies=lost["lost_bodies"], warnings=[*record.get("warnings", []), lost["warning"]])
+    audit = audit_overlaps(plan, trajectory)
+    if audit:
+        record.update(overlaps=audit)
+        breaches = overlaps.warnings(audit)
+        if breaches:
+            record.update(warnings=[*record.get("warnings", []), *breaches])
     rundir.write_record(directory, record)
     if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
         for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
@@ -192,6 +198,18 @@ def check_inside(plan: RunPlan, trajectory: Trajectory, deck: Path) -> dict[str,
         log = deck.parent / checkpoint.segment_name(LOG_NAME, plan.segment)
         raise EngineError(lost.message(), deck, log, log_tail(log)[-TAIL_LINES:])
     return {}
+
+
+def audit_overlaps(plan: RunPlan, trajectory: Trajectory, frames: slice = slice(None)) -> dict[str, Any] | None:
+    """The overlap audit (post.overlaps) of the plan's shaped bodies over the trajectory's frames
+    (`frames` of them); None for a run without shaped bodies."""
+    if not plan.shapes:
+        return None
+    dt = plan.schedule.dt
+    walls = [(wall.name, triangles, plan.removals[wall.name] * dt if wall.name in plan.removals else None)
+             for wall, triangles in zip(plan.case.walls, plan.wall_triangles)]
+    first = trajectory.n_bodies - len(plan.shapes)  # shaped bodies come after the spheres
+    return overlaps.audit(plan.shapes, first, trajectory.time[frames], trajectory.position[frames], trajectory.orientation[frames], walls)
 
 
 def ensure_run(

@@ -52,6 +52,9 @@ class BodyShape(Protocol):
     def centroid_offset(self) -> np.ndarray: ...  # (3,) m, the centre of mass from that box's centre, body frame
 
     @property
+    def sweep(self) -> tuple[np.ndarray, float] | None: ...  # (inner half extents (3,) m, radius m) of a sphere-swept box, else None
+
+    @property
     def particles(self) -> int: ...  # particles the engine moves for one body (a clump's spheres; 1)
 
     @property

@@ -140,6 +140,11 @@ class BrickClump:
         return len(self.radii)
 
     @property
+    def sweep(self) -> None:
+        """A clump is no sphere-swept box (shapes/overlap.py measures it by its spheres)."""
+        return None
+
+    @property
     def particles(self) -> int:
         """Particles the engine moves for this body: its spheres."""
         return self.n_spheres

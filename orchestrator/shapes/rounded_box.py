@@ -48,6 +48,11 @@ class BrickRoundedBox(OneBodyBrick):
         return self.half_axes - self.rounding
 
     @property
+    def sweep(self) -> tuple[np.ndarray, float]:
+        """(inner half extents (3,) m, rounding m): the box and the sphere that sweeps it."""
+        return self.inner_half_extents, float(self.rounding)
+
+    @property
     def extent(self) -> np.ndarray:
         return 2.0 * self.half_axes
 

@@ -63,6 +63,11 @@ class OneBodyBrick:
         return np.zeros(3)
 
     @property
+    def sweep(self) -> tuple[np.ndarray, float] | None:
+        """(inner half extents (3,) m, sweep radius m) of a sphere-swept box; None: not one."""
+        return None
+
+    @property
     def particles(self) -> int:
         """Particles the engine moves for this body: one."""
         return 1

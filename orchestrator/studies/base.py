@@ -33,7 +33,9 @@ from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions, build_stamp
 from orchestrator.results import RELEASE_DIR, REPORT, RESULTS, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
-from orchestrator.runner import ensure_run, resumable, run_case
+from orchestrator.plan import make_plan
+from orchestrator.post import overlaps
+from orchestrator.runner import audit_overlaps, ensure_run, resumable, run_case
 
 
 
@@ -177,6 +179,17 @@ def _set_aside_other_study(kind: StudyKind, outdir: Path, study_id: str) -> dict
     return {"attic": str(attic), "why": why}
 
 
+def _refuse_nested(kind: StudyKind, prepared: Case, directory: Path, packed: Trajectory) -> None:
+    """CaseError (one line) when the preparation's last frame holds bodies inside each other: its
+    run's overlap audit, or one made now of that frame for a run recorded without one."""
+    audit = (rundir.read_record(directory) or {}).get("overlaps")
+    if audit is None:
+        audit = audit_overlaps(make_plan(prepared, directory.parent), packed, frames=slice(-1, None))
+    refused = overlaps.refusal(audit, f"{kind.preparation} {directory}") if audit else None
+    if refused:
+        raise CaseError(refused)
+
+
 def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
                timeout: float | None, options: RunOptions) -> dict[str, Any]:
     release_dir = outdir / RELEASE_DIR
@@ -195,6 +208,7 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
         packed = read_results(directory / RESULTS)
         if not np.isfinite(packed.position[-1]).all():
             raise CaseError(f"{kind.preparation} {directory}: {kind.lost_bodies}")
+        _refuse_nested(kind, prepared, directory, packed)
         record.write_text(json.dumps({"directory": str(directory), "reused": reused, **extra}, indent=2) + "\n")
         release = kind.release_case(study, prepared, packed, kind.state_file(study, directory))
         run_case(release, outdir, release_dir, progress=progress("release") if progress else None, timeout=timeout, options=options)
@@ -202,6 +216,10 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
     report, arrays = kind.measure(study, trajectory, release_dir)
     shared_record = json.loads(record.read_text()) if record.exists() else {}
     report[kind.preparation] = {**report.get(kind.preparation, {}), **shared_record}
+    audits = {stage: (rundir.read_record(path) or {}).get("overlaps")
+              for stage, path in ((kind.preparation, Path(shared_record.get("directory", ""))), ("release", release_dir))}
+    if any(audits.values()):
+        report["overlaps"] = {stage: overlaps.summary(audit) for stage, audit in audits.items() if audit}
     report["study"] = study.model_dump(mode="json")
     report["study_id"] = study_id
     report["build"] = build

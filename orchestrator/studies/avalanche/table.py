@@ -121,6 +121,7 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any], demo: dic
     full_scale = bool(geometry) and all(geometry.get(key) == getattr(AvalancheGeometry, key) for key in
                                         ("slope_deg", "launch_height", "box_depth", "box_width", "box_height"))
     rows += initial_rows(report, full_scale)
+    rows += overlap_rows(report)
     packing = report.get("packing")
     if packing:
         target, value = packing["target_apparent_density"], packing["apparent_density"]
@@ -131,6 +132,21 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any], demo: dic
         if packing.get("trials"):
             rows.append(("μ brick/brick while packing", packing["brick_brick_mu"],
                          f"{len(packing['trials'])} trial(s): " + ", ".join(f"{t['mu']:.3g} → {t['apparent_density']:.0f}" for t in packing["trials"]), ""))
+    return rows
+
+
+def overlap_rows(report: dict[str, Any]) -> list[Row]:
+    """The overlap audit of the packing and the release (post.overlaps): the deepest brick-brick and
+    brick-wall overlaps against the nesting bound; empty for reports written before the audit."""
+    rows: list[Row] = []
+    for stage, audit in report.get("overlaps", {}).items():
+        bound = audit["bound_m"]
+        for label, deepest, breach in (("brick-brick", audit["pairs"]["overlap_m"], audit["nested_pairs"]),
+                                       ("brick-wall", audit["walls"]["overlap_m"], (audit["walls"]["overlap_m"] or 0.0) > bound)):
+            if deepest is None:
+                continue
+            verdict = "pass" if not breach else (f"{audit['nested_pairs']} pair(s) nested" if label == "brick-brick" else "into the wall")
+            rows.append((f"{stage}: deepest {label} overlap (mm)", 1e3 * deepest, f"≤ {1e3 * bound:.2g} (a quarter of the thickness)", verdict))
     return rows
 
 
