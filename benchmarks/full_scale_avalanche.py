@@ -118,6 +118,7 @@ def main() -> None:
         "packing_trials": trials,
         "packing_wall_s": sum(t["wall_s"] for t in trials),
         "initial": report.get("initial"),
+        "overlaps": report.get("overlaps"),  # the packing's and the release's overlap audits (post.overlaps)
         "front_on_flat_every_5cm": front_on_flat(report["front"]),
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "python": platform.python_version()},
         "mpi_processes": RunOptions().processes(),

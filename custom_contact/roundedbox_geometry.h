@@ -390,8 +390,12 @@ inline int boxTriangleContacts(const Box &A, const Triangle &tri, SubContact *ou
   for (int i = 0; i < 3; i++)
     if (A.c[i] + bound <= tri.lo[i] || A.c[i] - bound >= tri.hi[i]) return 0;  // beside the triangle
   // the wall pushes towards the side the box's centre is on: a vertex driven past the plane (an
-  // overlap beyond r) is pushed back, not through
-  const double side = dot(centre, tri.unit) < 0.0 ? -1.0 : 1.0;
+  // overlap beyond r) is pushed back, not through. While the centre itself is within r of the plane
+  // that side is unsure (a box that wrapped round a wall's rim, where no vertex holds it, crosses the
+  // plane beside the wall): past the plane nothing is pushed then, or the box would be thrown out.
+  const double centre_height = dot(centre, tri.unit);
+  const double side = centre_height < 0.0 ? -1.0 : 1.0;
+  const bool deep = std::fabs(centre_height) > A.r;
   int n = 0;
   double p[3], q[3];
   for (int v = 0; v < 8; v++) {
@@ -408,6 +412,7 @@ inline int boxTriangleContacts(const Box &A, const Triangle &tri, SubContact *ou
       if (distance >= A.r) continue;
       for (int i = 0; i < 3; i++) normal[i] = d[i] / distance;
     } else {  // on or past the plane
+      if (!deep) continue;
       for (int i = 0; i < 3; i++) normal[i] = side * tri.unit[i];
     }
     SubContact &s = out[n++];

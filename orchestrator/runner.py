@@ -144,9 +144,7 @@ def run_locked(case: Case, case_dir: Path, directory: Path, progress: ProgressCa
             record.update(warnings=[*record.get("warnings", []), *breaches])
     rundir.write_record(directory, record)
     if adapter.checkpoint_ext is not None:  # only now: a run killed before its record says completed can still continue
-        for _, path in checkpoint.checkpoints(directory, adapter.checkpoint_ext):
-            path.unlink()
-            checkpoint.seal_path(path).unlink(missing_ok=True)
+        checkpoint.clear(directory, adapter.checkpoint_ext)
     return record
 
 

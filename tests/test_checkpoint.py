@@ -385,3 +385,18 @@ def test_liggghts_loop_times_are_read_per_sub_run_set_ups_included() -> None:
            "  16100     1921      7.8964854\n"
            "Loop time of 1.427e-06 on 1 procs for 0 steps with 1920 atoms, finish time Wed Dec  2 06:22:31 2026\n")
     assert liggghts_adapter.loop_times(log) == [(2.82689, 805), (1.427e-06, 0)]
+
+
+def test_clearing_a_completed_runs_checkpoints_takes_orphaned_and_half_written_seals_too(tmp_path: Path) -> None:
+    """A kill between a pruned checkpoint's deletion and its seal's, or while a seal is written, leaves
+    a seal alone: the run's completion clears those too, and keeps what was set aside as damaged."""
+    names = ["checkpoint.100.restart", "checkpoint.100.restart.sha256",  # a checkpoint and its seal
+             "checkpoint.50.restart.sha256",  # a seal whose checkpoint was pruned
+             "checkpoint.150.restart.sha256.tmp",  # a seal being written
+             "checkpoint.20.restart.damaged", "checkpoint.20.restart.damaged.sha256",  # set aside
+             "checkpoint.100.yade", "frames.bin"]  # another engine's, and no checkpoint at all
+    for name in names:
+        (tmp_path / name).write_text("x")
+    checkpoint.clear(tmp_path, "restart")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["checkpoint.100.yade", "checkpoint.20.restart.damaged",
+                                                          "checkpoint.20.restart.damaged.sha256", "frames.bin"]

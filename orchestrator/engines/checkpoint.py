@@ -142,6 +142,16 @@ def set_aside(path: Path) -> Path:
     return target
 
 
+def clear(rundir: Path, ext: str) -> None:
+    """Delete every checkpoint with this extension and every seal of one, orphaned or half-written
+    seals included (a kill between a checkpoint's deletion and its seal's leaves a seal alone): a
+    completed run keeps none. Damaged checkpoints set aside stay."""
+    for path in list(rundir.iterdir()) if rundir.exists() else []:
+        match = _CHECKPOINT.match(path.name)
+        if match and match.group(2) in (ext, ext + SEAL, ext + SEAL + ".tmp"):
+            path.unlink(missing_ok=True)
+
+
 def prune(rundir: Path, ext: str, keep: int = KEEP) -> None:
     """Delete the checkpoints (and seals) older than the `keep` newest sealed ones; a newer one being
     written, and the damaged ones set aside, stay."""
