@@ -2,10 +2,10 @@
 
 Spheres have exact tests in `preflight`; a shaped body is checked through its `BodyShape`:
 - overlaps: pairs whose bounding spheres meet and whose boxes (`extent`) overlap by more than the
-  tolerance (separating axes: the boxes hold the solids, so a pair they clear is clear), then the
-  shape's own test, each body's probe spheres
-  (`probes`: a clump's own spheres, a smooth body's surface points) measured inside the other
-  (`penetration`), both ways;
+  tolerance (separating axes: the boxes hold the solids, so a pair they clear is clear), then their
+  overlap on the shapes (shapes/overlap.py `pair_overlap`: exact for two rounded boxes, else each
+  body's probe spheres, a clump's own spheres or a smooth body's surface points, measured inside the
+  other, both ways);
 - walls: a body cut by a wall, i.e. its surface points lie on both sides of the plane of the wall
   triangle nearest its centre, that triangle under its centre.
 A settled packing carries its contact overlaps into a release (m g / k_n, about a micrometre for the

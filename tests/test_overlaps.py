@@ -23,7 +23,7 @@ from orchestrator.results import RELEASE_DIR, read_results
 from orchestrator.rundir import read_record
 from orchestrator.runner import run_case
 from orchestrator.shapes.clump import quaternion_matrices
-from orchestrator.shapes.overlap import pair_overlap, probe_depth, swept_box_overlap
+from orchestrator.shapes.overlap import box_overlap, pair_overlap, probe_depth, swept_box_overlap
 from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.studies import brick_drop
 
@@ -67,8 +67,6 @@ def test_the_exact_overlap_is_the_depth_no_probe_exceeds_and_no_outer_box_falls_
     ca, cb = np.zeros((p, 3)), rng.uniform(-0.025, 0.025, (p, 3))
     exact = pair_overlap(SHAPE, SHAPE, ca, ra, cb, rb)
     probes = np.maximum(probe_depth(SHAPE, SHAPE, ca, ra, cb, rb), probe_depth(SHAPE, SHAPE, cb, rb, ca, ra))
-    from orchestrator.shapes.overlap import box_overlap
-
     outer = box_overlap(ca, ra, np.broadcast_to(SHAPE.half_axes, (p, 3)), cb, rb, np.broadcast_to(SHAPE.half_axes, (p, 3)))
     touching = exact > 0
     assert touching.sum() > 500
