@@ -30,7 +30,8 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from orchestrator import physics  # noqa: E402
-from orchestrator.studies.avalanche.study import load_study, run_study
+from orchestrator.studies.avalanche.study import AvalancheStudy, load_study, run_study  # noqa: E402
+from orchestrator.studies.seeds import member_seeds  # noqa: E402
 from orchestrator.validation import with_engine  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.results import read_results  # noqa: E402
@@ -83,9 +84,21 @@ def front_on_flat(front: dict[str, list[float]], every: float = 0.05) -> list[li
 
 
 def main() -> None:
+    """One record per seed: a study with `seeds:` is measured seed after seed (each in its own study
+    directory, outdir/seed-N, and its own record, RESULT's name with _seedN), never two at once."""
     study_path = Path(sys.argv[1]) if len(sys.argv) > 1 else STUDY
     study = with_engine(load_study(study_path), os.environ.get("BENCH_ENGINE"))
     outdir = Path(os.environ.get("BENCH_OUTPUT", REPO / "runs" / "full-scale"))
+    if study.seeds is None:
+        measure(study, study_path, outdir, RESULT)
+        return
+    for seed in member_seeds(study.seed, study.seeds):
+        member = study.model_copy(update={"seed": seed, "seeds": None})
+        measure(member, study_path, outdir / f"seed-{seed}", RESULT.with_name(f"{RESULT.stem}_seed{seed}{RESULT.suffix}"))
+
+
+def measure(study: AvalancheStudy, study_path: Path, outdir: Path, result_path: Path) -> None:
+    """Run (or reuse) one study of one seed in `outdir` and write its record to `result_path`."""
     outdir.mkdir(parents=True, exist_ok=True)
     log = outdir / "progress.log"
     started = time.perf_counter()
@@ -104,6 +117,7 @@ def main() -> None:
     result = {
         "study": str(study_path.relative_to(REPO) if study_path.is_relative_to(REPO) else study_path),
         "date": time.strftime("%Y-%m-%d"),
+        "seed": study.seed,
         "engine": study.engine.value,
         "bricks": release.n_bodies,
         "brick_kind": study.brick_spec.kind,
@@ -126,8 +140,8 @@ def main() -> None:
     }
     steps = (result["packing"]["steps"] or 0) + (result["release"]["steps"] or 0)
     result["steps_per_s"] = steps / wall if steps else None
-    RESULT.parent.mkdir(parents=True, exist_ok=True)
-    RESULT.write_text(json.dumps(result, indent=2) + "\n")
+    result_path.parent.mkdir(parents=True, exist_ok=True)
+    result_path.write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result, indent=2))
 
 

@@ -52,6 +52,7 @@ FORMAT_VERSION = 1
 # The run directory's layout, one home for each name (orchestrator.rundir owns what is in them).
 RESULTS = "results.h5"
 RUN_RECORD = "run.json"  # the record: run_id, build, status, timings, metrics
+CAMPAIGN_RECORD = "campaign.json"  # a campaign directory (or a study over seeds): which campaign it holds (campaign.store)
 CASE_COPY = "case.json"  # the validated inputs, canonical JSON
 REPORT = "report.json"  # a study's report, beside its release
 RELEASE_DIR = "run"  # a study's (or a micro-case's) run, inside its directory

@@ -42,7 +42,7 @@ import h5py
 from pydantic import BaseModel
 
 from orchestrator.case import Case, CaseError, MeshWall
-from orchestrator.results import CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json re-exported)
+from orchestrator.results import CAMPAIGN_RECORD, CASE_COPY, RESULTS, RUN_RECORD, read_json  # noqa: F401  (read_json, CAMPAIGN_RECORD re-exported)
 
 LOCK = ".lock"
 JOBS = "jobs"  # a batch scheduler's files for the run (job script, job logs, job record: orchestrator.slurm)

@@ -430,3 +430,32 @@ def test_the_report_shows_the_opening_beside_fig9_and_the_demo_beside_the_study_
     rows = {name: reference for name, _, reference, _ in comparison_rows(demo, {}, ranges)}
     assert rows["R (m)"].startswith(f"{ranges['runout'][0]:.3g}–{ranges['runout'][1]:.3g} (study's code")
     assert "Fig. 9" not in rows["opening: centre of mass x (m)"]
+
+
+def test_a_full_scale_deposit_is_shown_beside_the_experiments_with_its_verdicts() -> None:
+    """At full scale each deposit metric sits beside the experiment's (reference.toml
+    [avalanche.manzella2009.deposit]) and the study's DEM, judged on the experiment: L, R, W within
+    10 %, X_CM within 5 cm, the angles within 2°, H as a ratio; the ordered pile beside its own
+    experiment and both of the study's brick models."""
+    from orchestrator.studies.avalanche.study import load_study
+    from orchestrator.studies.avalanche.table import comparison_rows
+    from orchestrator.studies.reference import load_reference
+
+    reference = load_reference()
+    experiment = reference["avalanche"]["manzella2009"]["deposit"]["random_pour_experiment"]
+    deposit = {"length": experiment["L"] * 1.09, "runout": experiment["R"] * 1.12, "width": experiment["W"], "height": 2 * experiment["H"],
+               "x_cm": experiment["X_CM"] + 0.06, "travel_angle_cm_deg": experiment["phi_CM"] - 1.9, "fahrboschung_deg": 35.0, "outliers": 0}
+    cases = Path(__file__).parent.parent / "cases" / "avalanche"
+    report = {"deposit": deposit, "front": {"max_velocity": 1.0, "final_position": 1.0, "position": [0.0], "velocity": [1.0]},
+              "study": load_study(cases / "random_pour_full.yaml").model_dump(mode="json")}
+    rows = {name: (reference_cell, verdict) for name, _, reference_cell, verdict in comparison_rows(report, reference)}
+    assert rows["L (m)"] == ("experiment 0.931; study's DEM 0.882", "pass")
+    assert rows["R (m)"][1] == "off by +12% (allowed ±10%)"
+    assert rows["H (m)"][1] == "2.00 × the experiment's"
+    assert rows["X_CM (m)"][1] == "off by +0.06 (allowed ±0.05)"
+    assert rows["φ_CM (°)"][1] == "pass" and rows["φ_app (°)"][1] == "off by +3 (allowed ±2)"
+    report["study"] = load_study(cases / "ordered_pile_full.yaml").model_dump(mode="json")
+    rows = {name: (reference_cell, verdict) for name, _, reference_cell, verdict in comparison_rows(report, reference)}
+    assert rows["W (m)"][0] == "experiment 1.389; study's DEM: perfect 1.039, bevelled 1.21"
+    quarter = {**report, "study": load_study(cases / "random_pour_quarter.yaml").model_dump(mode="json")}
+    assert {verdict for name, _, _, verdict in comparison_rows(quarter, reference) if name == "L (m)"} == {""}  # not the experiment's set-up

@@ -22,7 +22,7 @@ from typing import Any, Callable, Iterator
 
 from orchestrator import rundir
 from orchestrator.campaign import store
-from orchestrator.campaign.spec import base_kind, expand, load_campaign
+from orchestrator.campaign.spec import Campaign, base_kind, expand, open_campaign
 from orchestrator.case import CaseError
 from orchestrator.engines import RunOptions, build_stamp
 from orchestrator.engines.base import EngineError, die_with_parent
@@ -33,14 +33,15 @@ RERUN = ("pending", "incomplete", "stale")  # what a launch runs; failed ones on
 
 
 def perform(point_json: str, directory: str, case_dir: str, timeout: float | None, kind: str = "case",
-            rerun_failed: bool = False, options: dict[str, Any] | None = None) -> dict[str, Any]:
+            rerun_failed: bool = False, options: dict[str, Any] | None = None, shared: str | None = None) -> dict[str, Any]:
     """Run one point of any launch kind (studies.registry) in `directory` (any process); never raises
     for an engine or case failure.
 
     Returns {"run_id", "status": completed | failed | skipped, ...}; skipped: another process holds
     the point or already completed it (or it failed before and rerun_failed is off), or its inputs no
     longer give the run id its directory stands for. options: the launch's RunOptions as a dict (how
-    engines run: MPI processes), passed to every engine.
+    engines run: MPI processes), passed to every engine. shared: where a study point keeps its
+    preparation (None: the campaign directory's folder for them).
     """
     run_options = RunOptions(**(options or {}))
     path = Path(directory)
@@ -54,19 +55,19 @@ def perform(point_json: str, directory: str, case_dir: str, timeout: float | Non
             point = launch.point(point_json, Path(case_dir))
             if rundir.holds_attempt(path) and not point.continues(path):
                 rundir.retire(path, path.parent.parent)
-            return _perform_locked(point, kind, path, Path(case_dir), timeout, started, run_options)
+            return _perform_locked(point, kind, path, Path(case_dir), timeout, started, run_options, Path(shared) if shared else None)
     except rundir.Busy:
         return {"run_id": path.name, "status": "skipped", "reason": "running elsewhere"}
 
 
 def _perform_locked(point: Point, kind: str, path: Path, case_dir: Path, timeout: float | None, started: float,
-                    options: RunOptions) -> dict[str, Any]:
+                    options: RunOptions, shared: Path | None) -> dict[str, Any]:
     today = rundir.run_id(point.inputs, build_stamp(point.inputs.engine.value), case_dir=case_dir)  # type: ignore[attr-defined]
     if today != path.name:  # a file it names, or the build, changed since the launch planned it: this directory is not its
         return {"run_id": path.name, "status": "skipped",
                 "reason": f"its inputs changed since the launch planned it (now run {today}): relaunch to run them"}
     try:
-        record = point.run(path, path.parent.parent, timeout, options)
+        record = point.run(path, path.parent.parent, timeout, options, shared)
         return {"run_id": path.name, "status": "completed", "wall_time_s": record["wall_time_s"]}
     except (EngineError, CaseError) as error:
         summary = error.summary if isinstance(error, EngineError) else str(error)
@@ -110,12 +111,14 @@ class LaunchPlan:
     skipped: dict[str, str]  # run id -> why (completed, running elsewhere, failed)
     rerun_failed: bool = False
     options: RunOptions = field(default_factory=RunOptions)
+    shared: Path | None = None  # where study points share preparations (None: the campaign's own folder)
 
 
-def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = False) -> LaunchPlan:
-    spec, base = load_campaign(campaign_file)
+def plan_campaign(campaign: Path | Campaign, campaign_dir: Path, rerun_failed: bool = False, shared: Path | None = None) -> LaunchPlan:
+    """What a launch of `campaign` (its file, or one made in memory) in `campaign_dir` runs. shared:
+    where study points keep their preparations (default: the campaign directory's own folder)."""
+    spec, base, base_path = dataclasses.astuple(campaign if isinstance(campaign, Campaign) else open_campaign(campaign))
     kind = base_kind(spec, base)
-    base_path = (campaign_file.parent / spec.base).resolve()
     base_dir = base_path.parent
     points, cases = {}, {}
     builds: dict[str, dict[str, Any]] = {}
@@ -137,13 +140,13 @@ def plan_campaign(campaign_file: Path, campaign_dir: Path, rerun_failed: bool = 
             to_run.append(identifier)
         else:
             skipped[identifier] = state
-    return LaunchPlan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed)
+    return LaunchPlan(campaign_dir, base_dir, spec.timeout_s, points, cases, kind, to_run, skipped, rerun_failed, shared=shared)
 
 
-def _arguments(plan: LaunchPlan, identifier: str) -> tuple[str, str, str, float | None, str, bool, dict[str, Any]]:
+def _arguments(plan: LaunchPlan, identifier: str) -> tuple[str, str, str, float | None, str, bool, dict[str, Any], str | None]:
     directory = str(store.run_dir(plan.campaign_dir, identifier))
     return (plan.cases[identifier].model_dump_json(), directory, str(plan.case_dir), plan.timeout, plan.kind, plan.rerun_failed,
-            plan.options.as_dict())
+            plan.options.as_dict(), str(plan.shared) if plan.shared is not None else None)
 
 
 def start_worker(campaign: int) -> None:
@@ -195,7 +198,7 @@ def dask_results(plan: LaunchPlan, jobs: int, address: str | None = None, start:
 
 
 def run_campaign(
-    campaign_file: Path,
+    campaign_file: Path | Campaign,
     campaign_dir: Path,
     jobs: int = 1,
     executor: str = "local",
@@ -204,16 +207,18 @@ def run_campaign(
     on_update: Callable[[Counts, dict[str, Any] | None], None] | None = None,
     options: RunOptions | None = None,
     dask_cluster: Callable[[int], Any] | None = None,
+    shared: Path | None = None,
 ) -> Counts:
     """Run every pending point (options: how the engines run, e.g. MPI processes per run).
 
     jobs: runs at once, at least 1; the local pool, or the Dask cluster this starts (`dask_cluster(n)`,
     default a LocalCluster; none with `dask_address`), gets at most one worker per point to run, and
-    none when every point is done. CaseError (nothing written) for jobs below 1 or a campaign
+    none when every point is done. shared: where study points keep their preparations (default the
+    campaign directory's folder for them). CaseError (nothing written) for jobs below 1 or a campaign
     directory that holds another campaign (store.claim)."""
     if jobs < 1:
         raise CaseError(f"--jobs: {jobs!r} runs at once; allowed: at least 1 (capped at the points to run)")
-    plan = dataclasses.replace(plan_campaign(campaign_file, campaign_dir, rerun_failed), options=options or RunOptions())
+    plan = dataclasses.replace(plan_campaign(campaign_file, campaign_dir, rerun_failed, shared), options=options or RunOptions())
     jobs = min(jobs, len(plan.to_run))
     counts = Counts(total=len(plan.points), skipped=len(plan.skipped), running=jobs)
     if on_update:

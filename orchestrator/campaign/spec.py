@@ -3,7 +3,7 @@
 Parameters are dotted paths into the case (`contacts.1.mu`, `bodies.spheres.0.velocity.2`).
 Designs: `grid` (every combination), `zip` (lists taken together), `lhs` and `sobol` (scipy.stats.qmc
 over ranges). Each design block multiplies the others (a grid × a Sobol design, say); `replicates`
-repeats every point with several seeds; `derived` sets parameters from others with arithmetic
+repeats every point with several seeds (as a study's own `seeds` do: each seed a point); `derived` sets parameters from others with arithmetic
 expressions (`contacts.0.kn: "contacts.1.kn * 2"`), evaluated by a small AST walker, never `eval`.
 """
 
@@ -15,6 +15,7 @@ import itertools
 import math
 import re
 import operator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -25,6 +26,7 @@ from scipy.stats import qmc
 from orchestrator.case import CaseError, Name, Strict, parse_model, read_yaml
 from orchestrator.engines import Engine
 from orchestrator.studies.registry import LAUNCH_KINDS, detect, launch_kind
+from orchestrator.studies.seeds import is_ensemble, members
 
 ParameterPath = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+))*$")]
 
@@ -89,8 +91,19 @@ def validate_point(kind: str, data: dict[str, Any], source: str) -> Any:
     return launch_kind(kind).parse(data, source)
 
 
-def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
-    """The campaign and its base case or study (as a mapping), both validated."""
+@dataclass(frozen=True)
+class Campaign:
+    """A campaign as launched: its spec, its base case or study (a mapping) and where the base lives
+    (files the base names are read beside it). From a campaign file (load_campaign) or made in memory
+    (a study's seeds: campaign.ensemble)."""
+
+    spec: CampaignSpec
+    base: dict[str, Any]
+    base_path: Path
+
+
+def open_campaign(path: Path) -> Campaign:
+    """The campaign file at `path` with its base, both validated (CaseError in one line)."""
     spec = parse_model(CampaignSpec, read_yaml(path, "campaign"), str(path))
     base_path = (path.parent / spec.base).resolve()
     try:
@@ -98,7 +111,13 @@ def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
     except CaseError as error:
         raise CaseError(f"{path}: base: {error}") from None
     validate_point(base_kind(spec, base), base, str(base_path))  # the base must be valid on its own
-    return spec, base
+    return Campaign(spec, base, base_path)
+
+
+def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:
+    """The campaign and its base case or study (as a mapping), both validated."""
+    campaign = open_campaign(path)
+    return campaign.spec, campaign.base
 
 
 MAX_POINTS = 100_000  # runs in one campaign
@@ -233,5 +252,16 @@ def expand(spec: CampaignSpec, base: dict[str, Any]) -> list[tuple[dict[str, Any
                 set_path(data, path, value)
                 parameters[path] = value
             source = f"{spec.name} point {index}" + (f" replicate {replicate}" if spec.replicates > 1 else "")
-            expanded.append((parameters, validate_point(kind, data, source)))
+            expanded.extend(_members(kind, spec, parameters, data, source))
     return expanded
+
+
+def _members(kind: str, spec: CampaignSpec, parameters: dict[str, Any], data: dict[str, Any], source: str) -> list[tuple[dict[str, Any], Any]]:
+    """A point as its runs: itself, or one run per seed of a study with `seeds` (studies/seeds.py),
+    each its own point with `seed` among its parameters."""
+    if not is_ensemble(data):
+        return [(parameters, validate_point(kind, data, source))]
+    if spec.replicates > 1:
+        raise CaseError(f"{spec.base}: seeds: the study has seeds and the campaign replicates {spec.replicates}; give one of them")
+    validate_point(kind, data, source)  # the study as written (its seeds checked), before its members
+    return [({**parameters, "seed": seed}, validate_point(kind, member, f"{source} seed {seed}")) for seed, member in members(data)]

@@ -13,6 +13,7 @@ from orchestrator.case import CaseError
 from orchestrator.validation import with_engine
 from orchestrator.cli.common import console, fail, progress_callback, run_options
 from orchestrator.engines import ENGINE_NAMES, EngineError
+from orchestrator.studies.seeds import member_seeds
 
 
 def study_table(title: str, report: dict[str, Any]) -> Table:
@@ -32,14 +33,26 @@ def study_table(title: str, report: dict[str, Any]) -> Table:
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
 @click.option("--packings", type=click.Path(file_okay=False, path_type=Path), help="Where settled packings are kept and reused (default: beside the study directory, in packings/).")
-def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None) -> None:
-    """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references."""
+@click.option("--jobs", "-j", type=click.IntRange(1, 1000), default=None, help="A study with seeds: seeds run at once (default: one per core).")
+@click.option("--executor", type=click.Choice(["local", "dask"]), default="local", show_default=True, help="A study with seeds: where its seeds run.")
+@click.option("--dask-address", help="A study with seeds: scheduler address of an existing Dask cluster.")
+def avalanche(study_path: Path, engine: str | None, output: Path | None, packings: Path | None = None, jobs: int | None = None,
+              executor: str = "local", dask_address: str | None = None) -> None:
+    """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references.
+    A study with `seeds:` runs each seed (in parallel, -j) and reports each seed, the mean and the range."""
     from orchestrator.studies.avalanche.report import write_report
     from orchestrator.studies.avalanche.study import load_study, run_study
 
     try:
         study = with_engine(load_study(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        if study.seeds is not None:
+            from orchestrator.cli.ensemble import launch_ensemble
+
+            console.print(f"[bold]{study.name}[/]: {study.brick_count} bricks, {study.packing.kind}, engine {study.engine.value}, "
+                          f"{len(member_seeds(study.seed, study.seeds))} seeds → {outdir}")
+            return launch_ensemble("avalanche", study_path, study.name, engine, outdir, jobs, executor, dask_address,
+                                   packings or outdir.resolve().parent / "packings")
         console.print(f"[bold]{study.name}[/]: {study.brick_count} bricks, {study.packing.kind}, engine {study.engine.value} → {outdir}")
         with Progress(TextColumn("{task.fields[stage]}"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console) as progress:
 

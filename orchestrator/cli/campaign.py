@@ -81,7 +81,7 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
     from orchestrator.campaign.spec import load_campaign
 
     try:
-        spec, _ = load_campaign(campaign_file)
+        spec, base = load_campaign(campaign_file)
     except CaseError as error:
         fail(str(error))
     directory = output or Path("runs") / "campaigns" / spec.name
@@ -115,6 +115,10 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
     from orchestrator.campaign.store import build_index
 
     index = build_index(directory)
+    from orchestrator.campaign.spec import base_kind
+    from orchestrator.cli.ensemble import report_ensembles
+
+    report_ensembles(directory, base_kind(spec, base), spec.name)  # points run over several seeds: each seed, the mean, the range
     remaining = int((index["status"] == "failed").sum()) if not index.empty else 0
     if remaining:  # this launch's failures, and those of earlier launches it skipped
         errors.print(f"[red]{remaining} failed runs remain[/] (`demorch campaign table {directory}`; run them again with --rerun-failed)",

@@ -71,14 +71,24 @@ def write_collapse_report(outdir: Path, report: dict[str, Any]) -> Path:
 @click.option("--engine", "-e", type=click.Choice(ENGINE_NAMES), help="Override the study's engine.")
 @click.option("--output", "-o", type=click.Path(file_okay=False, path_type=Path), help="Study directory (default runs/NAME-ENGINE).")
 @click.option("--preparations", type=click.Path(file_okay=False, path_type=Path), help="Where prepared columns are kept and reused.")
-def run_command(study_path: Path, engine: str | None, output: Path | None, preparations: Path | None) -> None:
-    """Rain the column (or reuse it), release it down the channel, report the front and the bed."""
+@click.option("--jobs", "-j", type=click.IntRange(1, 1000), default=None, help="A study with seeds: seeds run at once (default: one per core).")
+@click.option("--executor", type=click.Choice(["local", "dask"]), default="local", show_default=True, help="A study with seeds: where its seeds run.")
+@click.option("--dask-address", help="A study with seeds: scheduler address of an existing Dask cluster.")
+def run_command(study_path: Path, engine: str | None, output: Path | None, preparations: Path | None, jobs: int | None = None,
+                executor: str = "local", dask_address: str | None = None) -> None:
+    """Rain the column (or reuse it), release it down the channel, report the front and the bed.
+    A study with `seeds:` runs each seed (in parallel, -j) and reports each seed, the mean and the range."""
     from orchestrator.studies.collapse.spec import load_collapse
     from orchestrator.studies.collapse.study import run_collapse
 
     try:
         study = with_engine(load_collapse(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        if study.seeds is not None:
+            from orchestrator.cli.ensemble import launch_ensemble
+
+            return launch_ensemble("collapse", study_path, study.name, engine, outdir, jobs, executor, dask_address,
+                                   preparations or outdir.resolve().parent / "preparations")
         with _progress() as progress:
             report = run_collapse(study, outdir, progress=_stages(progress), preparations=preparations, options=run_options())
         figure = write_collapse_report(outdir, report)

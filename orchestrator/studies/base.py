@@ -40,6 +40,15 @@ from orchestrator.runner import audit_overlaps, ensure_run, resumable, run_case
 
 
 StageProgress = Callable[[str], Callable[[float, float], None] | None]
+# A row of an ensemble's table: metric, seed → value, the members' mean, lowest, highest, the
+# reference beside the mean and its verdict (studies.ensemble).
+EnsembleRow = tuple[str, dict[int, float], float, float, float, str, str]
+
+
+def ensemble_row(name: str, values: dict[int, float], mean: float, reference: str, verdict: str) -> EnsembleRow:
+    """One ensemble row; its range over the members' finite values (NaN when none is)."""
+    finite = [float(v) for v in values.values() if np.isfinite(v)]
+    return (name, values, mean, min(finite) if finite else float("nan"), max(finite) if finite else float("nan"), reference, verdict)
 STUDY_RECORD = "study.json"  # the study's id, written before its release starts
 
 
@@ -83,6 +92,16 @@ class StudyKind:
         """The report's scalar numbers, flat, for campaign tables and plots."""
         raise NotImplementedError
 
+    def ensemble_rows(self, reports: dict[int, dict[str, Any]]) -> list["EnsembleRow"]:
+        """The rows of an ensemble's table (seed → report of each member): by default every scalar
+        metric, without references; a kind with references puts them beside the mean."""
+        by_seed = {seed: self.metrics(report) for seed, report in reports.items()}
+        rows: list[EnsembleRow] = []
+        for name in sorted({name for values in by_seed.values() for name in values}):
+            values = {seed: metrics[name] for seed, metrics in by_seed.items() if name in metrics}
+            rows.append(ensemble_row(name, values, float(np.nanmean(list(values.values()))) if values else float("nan"), "", ""))
+        return rows
+
     # -- shared ---------------------------------------------------------------------------------
     def parse(self, data: object, source: str) -> Any:
         return parse_model(self.model, data if data is not None else {}, source)
@@ -118,11 +137,12 @@ class StudyPoint:
     def continues(self, directory: Path) -> bool:
         return resumable(directory / RELEASE_DIR, directory)
 
-    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions) -> dict[str, Any]:
+    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions,
+            shared: Path | None = None) -> dict[str, Any]:
         started = time.perf_counter()
         study, kind = self.inputs, self.kind
         rundir.save_inputs(directory, study)
-        report = kind.run(study, directory, shared=campaign_dir / kind.shared_dir, timeout=timeout, options=options)
+        report = kind.run(study, directory, shared=shared or campaign_dir / kind.shared_dir, timeout=timeout, options=options)
         release = rundir.read_record(directory / RELEASE_DIR) or {}
         shared = report[kind.preparation]
         record = {
@@ -142,8 +162,14 @@ class StudyPoint:
         return record
 
 
+ENSEMBLE_MARK = "campaign.json"  # a directory holding a study's seeds (or any campaign) has one (campaign.store.CAMPAIGN)
+
+
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
               timeout: float | None, options: RunOptions) -> dict[str, Any]:
+    if (outdir / ENSEMBLE_MARK).exists():
+        raise CaseError(f"--output: {outdir} holds a study over seeds or a campaign ({ENSEMBLE_MARK}); a study of one seed keeps a "
+                        "directory of its own: choose another -o")
     created = not outdir.exists()
     try:
         outdir.mkdir(parents=True, exist_ok=True)

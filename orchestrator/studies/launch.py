@@ -28,9 +28,11 @@ class Point(Protocol):
         """Whether the attempt cut off in `directory` goes on from its checkpoint (else it is retired)."""
         ...
 
-    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions) -> dict[str, Any]:
+    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions,
+            shared: Path | None = None) -> dict[str, Any]:
         """Run the point in `directory` (lock held) and return its run.json record; EngineError or
-        CaseError when it fails. campaign_dir holds what points of one campaign share."""
+        CaseError when it fails. campaign_dir holds what points of one campaign share; shared, when
+        given, is where they share preparations instead."""
         ...
 
 
@@ -63,7 +65,8 @@ class CasePoint:
     def continues(self, directory: Path) -> bool:
         return self.plan is not None and resumable(directory, self.case_dir, self.plan)
 
-    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions) -> dict[str, Any]:
+    def run(self, directory: Path, campaign_dir: Path, timeout: float | None, options: RunOptions,
+            shared: Path | None = None) -> dict[str, Any]:
         case = self.inputs
         assert isinstance(case, Case)
         return run_locked(case, self.case_dir, directory, None, timeout, get_adapter(case.engine.value, options), self.plan)

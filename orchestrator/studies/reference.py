@@ -29,3 +29,10 @@ def load_reference() -> dict[str, Any]:
             return tomllib.load(stream)
     except (OSError, tomllib.TOMLDecodeError) as error:
         raise CaseError(f"reference numbers: cannot read {path} ({error}); unset DEMORCH_REFERENCE to use the packaged copy") from None
+
+
+def demo_reference() -> dict[str, Any]:
+    """The demo's deposits by the study's own code, released from the demo's own slab packings
+    (reference.toml [avalanche.demo.richefeu_code_slab]: [lowest, highest] per metric over its runs,
+    `runs`, `seeds`, `mean_over_seeds`)."""
+    return load_reference()["avalanche"]["demo"]["richefeu_code_slab"]

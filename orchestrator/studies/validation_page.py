@@ -6,8 +6,8 @@ engine versions, and per engine
   same drops run with the study's own code, reference.toml [brick_drop.richefeu_code]), their
   metrics and the curves the figure draws;
 - optionally the demo avalanche (cases/avalanche/small.yaml) over several seeds: its deposit
-  metrics (reference: the demo run six times with the study's own code,
-  data/validation_reference.toml);
+  metrics (reference: the demo's own slab packings released by the study's own code, reference.toml
+  [avalanche.demo.richefeu_code_slab]);
 - optionally `collapse`: the path of a collapse row's record (`demorch collapse record`, e.g.
   docs/collapse/disc2d22.json), rendered by studies.collapse.record.render_section.
 
@@ -21,7 +21,6 @@ from __future__ import annotations
 import datetime as dt
 import json
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -32,8 +31,8 @@ from orchestrator.figures import subplots
 from orchestrator.capabilities import capabilities
 from orchestrator.studies import brick_drop
 from orchestrator.studies.collapse.record import render_section
+from orchestrator.studies.reference import demo_reference
 
-VALIDATION_REFERENCE = Path(__file__).resolve().parents[1] / "data" / "validation_reference.toml"
 REPO_ROOT = Path(__file__).resolve().parents[2]
 CURVE_EVERY = 10  # frames of a drop (1e-4 s apart) per recorded curve point: 1 ms
 DROPS = (("flat", "A"), ("flat", "B"), ("tilted", "A"), ("tilted", "B"))
@@ -175,10 +174,6 @@ def _rounded(values: np.ndarray, digits: int) -> list[float]:
 
 
 # -- the page ---------------------------------------------------------------------------------
-def demo_reference() -> dict[str, list[float]]:
-    return tomllib.loads(VALIDATION_REFERENCE.read_text())["avalanche_demo"]["richefeu_code"]
-
-
 def render_page(record: dict[str, Any], figures: Path, figures_link: str = "validation") -> str:
     """The Markdown page of a record; its figures are written into `figures` (linked as
     `figures_link`/NAME from the page)."""
@@ -230,9 +225,10 @@ def _demo_section(record: dict[str, Any], figures: Path, figures_link: str) -> l
     lines = ["## The demo avalanche against the study's code", "",
              f"The demo (`cases/avalanche/small.yaml`: 96 bricks, 0.4 m down the 45° slope) with seeds "
              f"{', '.join(map(str, seeds))} on each engine with its preferred brick ([Bricks](bricks.md#kinds-of-brick-clump-superquadric-or-rounded-box)), "
-             f"beside the demo's packing run {reference['runs']} times with "
-             "the 2012 study's own code (tiny perturbations). Ranges are lowest–highest over the runs; ✓: the engine's "
-             "range overlaps the study code's.", "",
+             f"beside the 2012 study's own code released from the demo's own slab packings (seeds "
+             f"{min(reference['seeds'])}–{max(reference['seeds'])}, {reference['runs']} runs: each packing as it is and with every "
+             "brick moved 1 µm, reference.toml [avalanche.demo.richefeu_code_slab]). Ranges are lowest–highest over the runs; "
+             "✓: the engine's range overlaps the study code's.", "",
              "| metric | study's code | " + " | ".join(engines) + " |", "|---|---|" + "---|" * len(engines)]
     for key, label in DEMO_METRICS:
         low, high = reference[key]

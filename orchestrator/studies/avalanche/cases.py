@@ -131,7 +131,7 @@ def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | N
     # A brick may leave the boards over an edge (the experiment's boards end; its floor is not modelled):
     # it is dropped from the results and counted in the deposit (bodies_lost), not an error.
     return _case(study, study.name, study.release.duration, study.release.output_interval, study.release.stop_at_rest,
-                 _contacts(study.contacts), clumps, walls, record_contacts=study.release.record_contacts,
+                 _contacts(study.contacts), clumps, walls, study.release.time_safety_factor, record_contacts=study.release.record_contacts,
                  lost_bodies="drop", gravity=list(geometry.release_gravity()), **extra)
 
 

@@ -24,7 +24,7 @@ from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results, safe_output_path
 from orchestrator.studies.avalanche.study import KIND
-from orchestrator.studies.avalanche.table import FLAT_PHASES, Row, phases_of, study_rows
+from orchestrator.studies.avalanche.table import FLAT_PHASES, Row, phases_of, report_experiment, study_rows
 
 def write_report(outdir: Path, report: dict[str, Any]) -> Path:
     """Plots, snapshots, VTK and index.html for the study directory `outdir` (its report.json as
@@ -37,7 +37,8 @@ def write_report(outdir: Path, report: dict[str, Any]) -> Path:
         safe_output_path(figures, entry.name)
     study = KIND.parse(report["study"], str(outdir / "report.json"))
     slope_deg = study.geometry.slope_deg
-    plot_deposit(trajectory, study.brick_spec.build(), figures / "deposit.png", slope_deg)
+    experiment = report_experiment(report)
+    plot_deposit(trajectory, study.brick_spec.build(), figures / "deposit.png", slope_deg, experiment["experiment"] if experiment else None)
     plot_front(report, figures / "front.png")
     snapshots = plot_snapshots(trajectory, figures, slope_deg=slope_deg)
     export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
@@ -51,10 +52,13 @@ def write_report(outdir: Path, report: dict[str, Any]) -> Path:
 FRAME = "x from the slope toe along the flow, y across it, z up from the board (m)"
 
 
-def plot_deposit(trajectory: Trajectory, brick: BodyShape, path: Path, slope_deg: float = 45.0) -> None:
+def plot_deposit(trajectory: Trajectory, brick: BodyShape, path: Path, slope_deg: float = 45.0,
+                 experiment: dict[str, float] | None = None) -> None:
     """Thickness map of the deposit (gridded at half a brick width, contours every 5 mm) with its
     length L, runout R, width W and centre of mass marked, bodies outside it as crosses; below it,
-    the longitudinal section. One frame for every position: FRAME."""
+    the longitudinal section. One frame for every position: FRAME. experiment: the experiment's
+    deposit (reference.toml [avalanche.manzella2009.deposit]: L, R, W, X_CM in m), drawn as the
+    rectangle its L, R and W span about the axis, with its centre of mass."""
     final = trajectory.position[-1]
     members = deposit.deposit_members(final, trajectory.radius)
     metrics = deposit.deposit_metrics(trajectory.position[0], final, trajectory.mass, trajectory.radius, slope_deg=slope_deg)
@@ -77,6 +81,12 @@ def plot_deposit(trajectory: Trajectory, brick: BodyShape, path: Path, slope_deg
     plan.axhline(ys.min() - brick.bounding_radius, color="tab:green", lw=0.8)
     plan.axhline(ys.max() + brick.bounding_radius, color="tab:green", lw=0.8, label=f"W = {metrics.width:.3f} m")
     plan.plot([metrics.x_cm], [float(np.average(ys, weights=trajectory.mass[members]))], "k*", ms=10, label=f"centre of mass, x = {metrics.x_cm:.3f} m")
+    if experiment is not None:
+        from matplotlib.patches import Rectangle
+
+        plan.add_patch(Rectangle((experiment["R"] - experiment["L"], -experiment["W"] / 2), experiment["L"], experiment["W"], fill=False,
+                                 ls="--", lw=1.2, ec="k", label=f"experiment: L {experiment['L']:g}, R {experiment['R']:g}, W {experiment['W']:g} m"))
+        plan.plot([experiment["X_CM"]], [0.0], "k+", ms=12, mew=1.5, label=f"experiment's centre of mass, x = {experiment['X_CM']:g} m")
     strays = ~members & np.isfinite(final).all(axis=1)
     if strays.any():
         plan.plot(final[strays, 0], final[strays, 1], "x", color="grey", label=f"outside the deposit ({int(strays.sum())})")

@@ -8,6 +8,7 @@ expands it into the packing and release cases.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Literal
 
 from pydantic import Field, model_validator
@@ -17,6 +18,7 @@ from orchestrator.case import Name, Real, RestStop, Strict
 from orchestrator.capabilities import refused_kinds
 from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
 from orchestrator.shapes import BodyShape
+from orchestrator.studies.seeds import Seeds, member_seeds
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, brick_count
 
 # Between the cells of the rain grid (m): part of the packing's definition (the recorded packings of
@@ -30,6 +32,8 @@ RAIN_GAP = 0.003
 # the floor under the rows); the experiment's: 1600. At full scale the pile settles onto that
 # (docs/studies/avalanche.md, packing density).
 PILE_GAP = 0.0002
+
+DEMO_STUDY = Path(__file__).resolve().parents[3] / "cases" / "avalanche" / "small.yaml"  # `demorch demo`: 96 bricks, about a minute
 
 
 
@@ -139,12 +143,19 @@ class ReleaseSpec(Strict):
     # Record every contact of the flow at each frame (results.h5 /contacts; the report then draws the
     # deposit's force chains). Opt-in: it multiplies the output.
     record_contacts: bool = False
+    # The flow's Δt as a fraction of the shortest contact duration (a case's time.safety_factor).
+    # Default: the engine's (0.02 on LIGGGHTS: 50 steps per contact). The step study of
+    # docs/benchmarks.md measures deposits and a brick's rebound at 1×, 1.5× and 2× it.
+    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) | None = None
 
 
 class AvalancheStudy(Strict):
     name: Name
     engine: Engine = Engine(DEFAULT_ENGINE)
     seed: int = Field(default=2009, ge=1, le=2**31 - 1)
+    # An ensemble: a count of seeds from `seed` on, or a list; each seed is packed and released on
+    # its own, and the report gives each seed, the mean and the range (studies/seeds.py).
+    seeds: Seeds = None
     geometry: GeometrySpec = GeometrySpec()
     brick: BrickSpec = BrickSpec()
     contacts: ContactSpec = ContactSpec()
@@ -158,6 +169,11 @@ class AvalancheStudy(Strict):
                 f"packing.contacts.law: must be {self.contacts.law!r} like contacts.law "
                 "(the flow continues the packing's contact history)"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _seeds_fit(self) -> "AvalancheStudy":
+        member_seeds(self.seed, self.seeds)
         return self
 
     @model_validator(mode="after")

@@ -23,8 +23,9 @@ from orchestrator.studies.avalanche.cases import first_packing_mu, packing_case,
 from orchestrator.studies.avalanche.density import Trial, closest, next_mu
 from orchestrator.studies.avalanche.geometry import apparent_density
 from orchestrator.studies.avalanche.measure import LOST_WHILE_PACKING, initial_state, measure, packed_density
-from orchestrator.studies.avalanche.spec import PILE_GAP, RAIN_GAP, AvalancheStudy, BrickSpec, ContactSpec, PackingSpec
-from orchestrator.studies.base import StageProgress, StudyKind
+from orchestrator.studies.avalanche.table import ensemble_rows
+from orchestrator.studies.avalanche.spec import DEMO_STUDY, PILE_GAP, RAIN_GAP, AvalancheStudy, BrickSpec, ContactSpec, PackingSpec
+from orchestrator.studies.base import EnsembleRow, StageProgress, StudyKind
 from orchestrator.studies.reference import PACKAGED_REFERENCE, SHARED_REFERENCE, load_reference, reference_path
 
 __all__ = ["AvalancheStudy", "BrickSpec", "ContactSpec", "PackingSpec", "PILE_GAP", "RAIN_GAP", "KIND", "load_study", "run_study",
@@ -71,7 +72,9 @@ class AvalancheKind(StudyKind):
         best = closest(trials, target)
         summary: dict[str, Any] = {"brick_brick_mu": best.mu, "trials": [t.as_dict() for t in trials],
                                   "target_reached": abs(best.off(target)) <= search.tolerance}
-        if not summary["target_reached"]:
+        # A search that ran out of trials is warned of; a packing asked to pack once (max_trials 1)
+        # is not a search: its density and verdict are in the table (table.packing_verdict).
+        if not summary["target_reached"] and search.max_trials > 1:
             summary["warning"] = (f"packing: apparent density {best.apparent_density:.0f} kg/m³ ({best.off(target):+.1%}) is the closest of "
                                  f"{len(trials)} trial(s) to the target {target:g} ± {search.tolerance:.0%} (μ brick/brick {best.mu:.3g} "
                                  f"while packing; packing.density_search sets the trials and the bounds of μ)")
@@ -103,9 +106,13 @@ class AvalancheKind(StudyKind):
         metrics["kinetic_to_released_energy"] = float(report["kinetic_to_released_energy"])
         return metrics
 
+    def ensemble_rows(self, reports: dict[int, dict[str, Any]]) -> list[EnsembleRow]:
+        """The study's table (table.study_rows) over seeds: each seed's value, and the references and
+        verdicts beside the members' mean."""
+        return ensemble_rows(reports)
+
 
 KIND = AvalancheKind()
-DEMO_STUDY = Path(__file__).resolve().parents[3] / "cases" / "avalanche" / "small.yaml"  # `demorch demo`: 96 bricks, about half a minute
 
 
 def load_study(path: Path) -> AvalancheStudy:

@@ -29,6 +29,7 @@ from orchestrator.case import Name, Real, Strict, parse_model, read_yaml
 from orchestrator.engines import DEFAULT_ENGINE, Engine
 from orchestrator.engine_sections import StudyEngineSections
 from orchestrator.studies.collapse.fields import FieldsSpec
+from orchestrator.studies.seeds import Seeds, member_seeds
 
 GRAIN, WALL = "grain", "wall"  # one grain material: the rough bed's grains are glued grains (`fixed`)
 
@@ -86,6 +87,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     name: Name = "collapse"
     engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 2022
+    seeds: Seeds = None  # an ensemble: a count of seeds from `seed` on, or a list (studies/seeds.py)
     # 3: a channel between side walls (the quasi-2D set-up of the scaling law and of the study's
     # reduced 3D runs). 2: grains in one plane, ≈ 5 × cheaper; its runout hardly depends on μ
     # (free rolling) and overshoots the law (see docs/studies/collapse.md).
@@ -116,6 +118,7 @@ class CollapseStudy(StudyEngineSections, Strict):
             raise ValueError(f"fields.stations: at most channel.length / column.length ({self.channel.length / self.column.length:g}) R0 past the gate")
         if 0.0 < self.bed.erodible_thickness < 0.5 * d:
             raise ValueError(f"bed.erodible_thickness: 0, or at least half a grain diameter ({0.5 * d} m)")
+        member_seeds(self.seed, self.seeds)
         return self
 
     @property
