@@ -58,6 +58,31 @@ def test_a_packing_whose_saved_state_was_edited_is_set_aside_and_made_again(tmp_
     assert rundir.status(directory, builds=build_stamp, expected_id=directory.name) == "completed"
 
 
+@requires_liggghts
+@pytest.mark.engine
+def test_a_study_whose_release_results_were_edited_is_released_again_not_re_reported(tmp_path: Path) -> None:
+    """A finished study is measured again only from the release it sealed: results.h5 changed since
+    (here the deposit moved 10 cm down the flow) is set aside in the attic, with one line saying why,
+    and the release runs again from the same packing."""
+    import h5py
+
+    from conftest import tiny_study
+    from orchestrator.studies.avalanche.study import run_study
+
+    study = tiny_study("liggghts")
+    study = study.model_copy(update={"release": study.release.model_copy(update={"duration": 0.4})})
+    first = run_study(study, tmp_path / "study")
+    results = tmp_path / "study" / "run" / "results.h5"
+    with h5py.File(results, "r+") as edited:
+        edited["frames/position"][-1, :, 0] += 0.1
+    again = run_study(study, tmp_path / "study")
+    assert not again["finished_before"] and again["packing"]["reused"]
+    assert again["set_aside"]["why"] == "its release results.h5 changed since it was sealed"
+    assert again["deposit"]["runout"] == pytest.approx(first["deposit"]["runout"], abs=1e-9)  # the true deposit, released again
+    assert (Path(again["set_aside"]["attic"]) / "results.h5").exists()  # the edited file kept, not deleted
+    assert run_study(study, tmp_path / "study")["finished_before"]  # the new release is sealed and reused
+
+
 def test_a_campaign_point_whose_mesh_changed_after_the_plan_is_not_run_into_the_old_points_directory(tmp_path: Path) -> None:
     """The directory of a point stands for the id of the inputs as planned: if a file the case names
     changed since, the worker gives the point up (a relaunch plans it under its new id)."""
@@ -166,3 +191,28 @@ def test_packings_directory_trouble_is_a_field_error_and_a_finished_packing_in_a
     assert ensure_run(case, tmp_path / "fine", "packing") == (directory, True)
     with pytest.raises(CaseError, match=r"^the packing directory: .*Read-only file system.*; give a writable one"):
         ensure_run(case, tmp_path / "elsewhere", "packing")
+
+
+@requires_liggghts
+@pytest.mark.engine
+def test_a_campaign_study_point_whose_release_results_were_edited_is_stale_and_runs_again(tmp_path: Path) -> None:
+    """A study point's record seals its release's results: edited since, the point is `stale`, and
+    the next launch runs it again (the edited file goes to the attic)."""
+    import h5py
+    import yaml
+
+    from conftest import tiny_study
+    from orchestrator.campaign.execute import run_campaign
+
+    study = tiny_study("liggghts").model_dump(mode="json", exclude_defaults=True)
+    study["release"]["duration"] = 0.4
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(study))
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump({"name": "c", "base": "tiny.yaml"}))
+    out = tmp_path / "out"
+    assert run_campaign(tmp_path / "c.yaml", out).done == 1
+    point = next((out / "runs").iterdir())
+    assert store.status(point) == "completed"
+    with h5py.File(point / "run" / "results.h5", "r+") as edited:
+        edited["frames/position"][-1, :, 0] += 0.1
+    assert store.status(point) == "stale"
+    assert run_campaign(tmp_path / "c.yaml", out).done == 1 and store.status(point) == "completed"

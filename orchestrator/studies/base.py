@@ -151,6 +151,8 @@ class StudyPoint:
             "run_id": report["study_id"],  # rundir.run_id of the study with today's build, as the study computed it
             "build": report["build"],
             "results": f"{RELEASE_DIR}/{RESULTS}",
+            # the point stands for its release as sealed: results changed since make it stale (run again)
+            "sealed": rundir.seal_outputs(directory, [f"{RELEASE_DIR}/{RESULTS}"]),
             "engine": release.get("engine"),
             "engine_version": release.get("engine_version"),
             "wall_time_s": time.perf_counter() - started,
@@ -205,6 +207,17 @@ def _set_aside_other_study(kind: StudyKind, outdir: Path, study_id: str) -> dict
     return {"attic": str(attic), "why": why}
 
 
+def _unsound_release(release_dir: Path) -> str | None:
+    """Why a finished release may not be measured again (its record is not a completed run's, it was
+    never sealed, or a sealed output changed since: rundir.why_stale), or None when it may."""
+    record = rundir.read_record(release_dir) or {}
+    if record.get("status") != "completed":
+        return f"has no completed record (status {str(record.get('status'))[:20]!r})"
+    if not record.get("sealed"):
+        return "was never sealed"
+    return rundir.why_stale(release_dir, record)
+
+
 def _refuse_nested(kind: StudyKind, prepared: Case, directory: Path, packed: Trajectory) -> None:
     """CaseError (one line) when the preparation's last frame holds bodies inside each other: its
     run's overlap audit, or one made now of that frame for a run recorded without one."""
@@ -228,6 +241,10 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
     except OSError as error:
         raise _unwritable(outdir, error) from None
     finished_before = (release_dir / RESULTS).exists()
+    unsound = _unsound_release(release_dir) if finished_before else None
+    if unsound:  # never re-reported from results changed since the release sealed them: set aside, run again
+        set_aside = {"attic": str(rundir.retire(release_dir, outdir.resolve().parent)), "why": f"its release {unsound}"}
+        finished_before = False
     if not finished_before:
         root = shared if shared is not None else outdir.resolve().parent / kind.shared_dir
         prepared, directory, reused, extra = kind.prepare(study, root, progress, timeout, options)
