@@ -258,3 +258,31 @@ DAMAGED: dict[str, Callable[[Path], Any]] = {
 def test_post_on_more_damaged_run_directories(name: str, tmp_path: Path) -> None:
     DAMAGED[name](tmp_path)
     assert_one_line_error(*run_cli(["post", str(tmp_path)]), expected_code=5, field="damaged results")
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "foreign", "huge"])
+def test_a_validation_record_that_is_no_record_is_one_line_without_reading_it_whole(tmp_path: Path, kind: str) -> None:
+    """`demorch validation --record` reads a regular JSON file of bounded size holding a record: a
+    device (/dev/zero grew to 23.6 GB before), a FIFO (it hung), a foreign JSON (a KeyError) and a
+    file over 50 MB are refused in one line naming --record, exit 2."""
+    import os
+
+    import orchestrator.studies.validation_page  # noqa: F401  (imported before the timed call: matplotlib's import is not the check's time)
+
+    path = {"device": Path("/dev/zero"), "fifo": tmp_path / "fifo", "foreign": tmp_path / "foreign.json", "huge": tmp_path / "huge.json"}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "foreign":
+        path.write_text(json.dumps({"drops": [1, 2]}))
+    elif kind == "huge":
+        with open(path, "wb") as stream:
+            stream.truncate(60_000_000)  # sparse: no disk used
+    assert_one_line_error(*run_cli(["validation", "--page-only", "--record", str(path), "--page", str(tmp_path / "page.md")]),
+                          expected_code=2, field="--record")
+
+
+@pytest.mark.parametrize("arguments, field", [(["--size", "nan", "0.015", "0.008"], "--size"), (["--size", "0.031", "inf", "0.008"], "--size"),
+                                              (["--density", "nan"], "--density")])
+def test_a_brick_of_no_size_is_one_line(arguments: list[str], field: str) -> None:
+    """`demorch brick` printed a table of NaN for a NaN size; now one line naming the option and its range."""
+    assert_one_line_error(*run_cli(["brick", *arguments]), expected_code=2, field=field)

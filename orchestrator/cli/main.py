@@ -7,6 +7,8 @@ common holds what they share.
 
 from __future__ import annotations
 
+import math
+
 import json
 import sys
 from pathlib import Path
@@ -231,8 +233,10 @@ def brick(layouts: tuple[tuple[int, int, int], ...], bevel_deg: float, size: tup
     """How well each clump resolution fits the brick: spheres, radii, surface gap, mass, inertia."""
     from orchestrator.shapes.clump import BrickClump
 
-    if min(size) <= 0.0:
-        fail(f"--size: every dimension must be > 0 m (got {size})")
+    if not all(math.isfinite(v) and 0.0 < v <= 1.0 for v in size):
+        fail(f"--size: every dimension must be a number in (0, 1] m (got {size})")
+    if not (math.isfinite(density) and density <= 1e5):
+        fail(f"--density: must be a number in (0, 1e5] kg/m³ (got {density})")
     for layout in layouts:
         if not all(1 <= n <= 64 for n in layout):
             fail(f"--layout: each count must be in [1, 64] (got {layout})")

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import stat
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -32,7 +34,7 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
 
     if page_only:
         try:
-            record = json.loads(record_path.read_text())
+            record = read_validation_record(record_path)
         except (OSError, ValueError) as error:
             fail(f"--record: cannot read {record_path} ({error})")
     else:
@@ -47,9 +49,9 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
                                            demo=demo, progress=lambda stage: console.print(stage))
         except EngineError as error:
             fail(str(error), code=EXIT_ENGINE)
-        if record_path.is_file():  # engines not run again keep their rows; the collapse row is recorded apart (demorch collapse record)
+        if record_path.exists():  # engines not run again keep their rows; the collapse row is recorded apart (demorch collapse record)
             try:
-                record = pages.merge_records(json.loads(record_path.read_text()), record)
+                record = pages.merge_records(read_validation_record(record_path), record)
             except (OSError, ValueError) as error:  # keep what was just measured beside the damaged record
                 kept = record_path.with_name(record_path.stem + ".new.json")
                 kept.write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
@@ -60,3 +62,21 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
     figures = record_path.parent
     page.write_text(pages.render_page(record, figures, figures_link=str(figures.relative_to(page.parent.resolve()) if figures.is_relative_to(page.parent.resolve()) else figures)))
     console.print(f"page: {page}")
+
+
+MAX_RECORD_BYTES = 50_000_000  # a validation record is about 1 MB (its curves); anything far larger is not one
+
+
+def read_validation_record(path: Path) -> dict[str, Any]:
+    """The validation record at `path`: a regular JSON file of at most MAX_RECORD_BYTES holding an
+    object with `versions` and `drops` mappings. ValueError (one line) otherwise, before reading a
+    device, a FIFO or an endless file; OSError when it cannot be opened."""
+    if not stat.S_ISREG(path.stat().st_mode):
+        raise ValueError("not a regular file")
+    size = path.stat().st_size
+    if size > MAX_RECORD_BYTES:
+        raise ValueError(f"{size / 1e6:.0f} MB; a validation record is at most {MAX_RECORD_BYTES / 1e6:.0f} MB")
+    record = json.loads(path.read_text())
+    if not isinstance(record, dict) or not all(isinstance(record.get(key), dict) for key in ("versions", "drops")):
+        raise ValueError("not a validation record: it has no `versions` and `drops` mappings (`demorch validation` writes one)")
+    return record
