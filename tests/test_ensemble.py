@@ -138,3 +138,6 @@ def test_an_avalanche_over_seeds_prints_each_seed_the_mean_and_the_range_and_a_n
     rows = {row[0]: row for row in KIND.ensemble_rows({int(s): json.loads((out / m["directory"] / "report.json").read_text())
                                                         for s, m in zip(lengths, group["members"])})}
     assert math.isclose(rows["L (m)"][2], metric["mean"], rel_tol=1e-12) and "ensemble.md" in second.output
+    (out / "ensemble.md").unlink()
+    post = runner.invoke(cli, ["post", str(out)], env={"COLUMNS": "250"})  # the ensemble's table, written again
+    assert post.exit_code == 0 and "seed 3" in post.output and (out / "ensemble.md").exists(), post.output

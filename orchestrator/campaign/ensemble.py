@@ -63,7 +63,7 @@ def study_campaign(kind: str, path: Path, engine: str | None = None) -> Campaign
 
 def gather(campaign_dir: Path) -> list[Group]:
     """The newest launch's points of `campaign_dir` grouped by their parameters other than `seed`,
-    each member with its status and, when completed, its report."""
+    each member with its status and, when completed (or stale: made by another build), its report."""
     points = rundir.read_json(campaign_dir / store.POINTS) or {}
     latest = store.latest_ids(campaign_dir)
     groups: dict[str, Group] = {}
@@ -73,7 +73,8 @@ def gather(campaign_dir: Path) -> list[Group]:
         rest = {k: v for k, v in parameters.items() if k != "seed"}
         directory = store.run_dir(campaign_dir, identifier)
         state = store.status(directory)
-        report = read_json(directory / REPORT) if state == "completed" else None
+        # a stale member (another build made it, or its point was superseded) still shows its numbers, flagged
+        report = read_json(directory / REPORT) if state in ("completed", "stale") else None
         seed = int(parameters.get("seed", (report or {}).get("study", {}).get("seed", 0)))
         group = groups.setdefault(json.dumps(rest, sort_keys=True), Group(rest, []))
         group.members.append(Member(seed, directory, state, report))

@@ -91,6 +91,10 @@ def report_ensembles(campaign_dir: Path, kind_name: str, name: str, always: bool
         missing = [f"{member.seed} ({member.status})" for member in group.members if member.report is None]
         if missing:
             console.print(f"[yellow]not in the table:[/] seed {', '.join(missing)}")
+        stale = [str(member.seed) for member in group.members if member.status == "stale" and member.report is not None]
+        if stale:
+            console.print(f"[yellow]stale:[/] seed {', '.join(stale)} (made by another build of the code or from other inputs; "
+                          "launching the study again runs them again)")
         pages.append(ensemble_markdown(title, rows))
     if pages:
         (campaign_dir / ENSEMBLE_PAGE).write_text("\n".join(pages))

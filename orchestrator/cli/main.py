@@ -20,6 +20,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from rich.table import Table
 
 from orchestrator.case import CaseError, load_case
+from orchestrator.results import CAMPAIGN_RECORD, read_json
 from orchestrator.validation import with_engine
 from orchestrator.cli.avalanche import avalanche, demo, study_table
 from orchestrator.cli.campaign import campaign
@@ -166,7 +167,22 @@ def post(rundir: Path, as_json: bool) -> None:
         damaged(rundir, "damaged results", error)
 
 
+def _post_campaign(directory: Path) -> None:
+    """A study over seeds or a campaign directory: each point's table over its seeds, written again
+    (cli.ensemble), or one line saying where its runs' own reports are."""
+    from orchestrator.cli.ensemble import report_ensembles
+
+    name = str((read_json(directory / CAMPAIGN_RECORD) or {}).get("name", directory.name))
+    kinds = {str((read_json(run / "run.json") or {}).get("kind", "case")) for run in sorted((directory / "runs").glob("*"))[:50]}
+    kind = next(iter(kinds - {"case"}), "case")
+    if kind == "case" or not report_ensembles(directory, kind, name, always=True) and not (directory / "ensemble.md").exists():
+        fail(f"{directory} is a campaign directory: `demorch campaign table {directory}` lists its runs; `demorch post` one of {directory / 'runs'}/<id>")
+
+
 def _post(rundir: Path, as_json: bool) -> None:
+    if (rundir / CAMPAIGN_RECORD).exists() and not (rundir / REPORT).exists():  # a study over seeds or a campaign
+        _post_campaign(rundir)
+        return
     if (rundir / REPORT).exists():
         report = json.loads((rundir / REPORT).read_text())
         from orchestrator.studies.avalanche.report import write_report
