@@ -38,7 +38,7 @@ def write_report(outdir: Path, report: dict[str, Any]) -> Path:
     study = KIND.parse(report["study"], str(outdir / "report.json"))
     slope_deg = study.geometry.slope_deg
     experiment = report_experiment(report)
-    plot_deposit(trajectory, study.brick_spec.build(), figures / "deposit.png", slope_deg, experiment["experiment"] if experiment else None)
+    plot_deposit(trajectory, study.brick_spec.build(), figures / "deposit.png", slope_deg, experiment=experiment["experiment"] if experiment else None)
     plot_front(report, figures / "front.png")
     snapshots = plot_snapshots(trajectory, figures, slope_deg=slope_deg)
     export_vtk(trajectory, figures, every=max(1, trajectory.n_frames // 20))
