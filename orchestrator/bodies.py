@@ -53,7 +53,9 @@ class Brick(Strict):
             raise ValueError(f"rounding: needs bevel_deg 0 (a brick bevelled by {self.bevel_deg!r}° has no rounded edges); "
                              f"allowed: 0 (got {self.rounding!r})")
         if self.rounding and not MIN_SIZE <= self.rounding < limit:
-            raise ValueError(f"rounding: allowed: 0, or [{MIN_SIZE:g}, {limit:g}) m (below half the smallest side) (got {self.rounding!r})")
+            # 0 is offered only to a kind that takes it (a rounded box is its rounding)
+            zero = "" if self.kind and shape_kind(self.kind).check(self.model_copy(update={"rounding": 0.0})) else "0, or "
+            raise ValueError(f"rounding: allowed: {zero}[{MIN_SIZE:g}, {limit:g}) m (below half the smallest side) (got {self.rounding!r})")
         problem = shape_kind(self.kind).check(self) if self.kind else None  # None: a study's brick, the engine's preferred kind
         if problem:
             raise ValueError(problem)
@@ -89,6 +91,11 @@ class BrickShape(Brick):
             a, b, c = sorted(self.inertia)
             if c > a + b:
                 raise ValueError(f"inertia: no solid has these principal moments (the largest, {c!r}, exceeds the sum of the other two)")
+            if self.mass is not None:  # a body within the brick's box: I ≤ m R², R its half diagonal (5 % for a bevel's tilt)
+                most = 1.05 * self.mass * (self.length ** 2 + self.width ** 2 + self.thickness ** 2) / 4.0
+                if c > most:
+                    raise ValueError(f"inertia: {c!r} kg m² is more than a body of mass {self.mass!r} kg inside a {self.length:g} × {self.width:g} × "
+                                     f"{self.thickness:g} m brick can have (m R², R its half diagonal); allowed: each moment at most {most:.4g} kg m²")
         return self
 
     def body(self, density: float) -> BodyShape:

@@ -53,6 +53,7 @@ FORMAT_VERSION = 1
 RESULTS = "results.h5"
 RUN_RECORD = "run.json"  # the record: run_id, build, status, timings, metrics
 CAMPAIGN_RECORD = "campaign.json"  # a campaign directory (or a study over seeds): which campaign it holds (campaign.store)
+STUDY_RECORD = "study.json"  # a study's directory: the study's id and kind, written before its release starts (studies.base)
 CASE_COPY = "case.json"  # the validated inputs, canonical JSON
 REPORT = "report.json"  # a study's report, beside its release
 RELEASE_DIR = "run"  # a study's (or a micro-case's) run, inside its directory

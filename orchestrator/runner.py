@@ -24,7 +24,7 @@ from orchestrator.estimate import check_machine
 from orchestrator.plan import Resume, RunPlan, make_plan
 from orchestrator.post import overlaps, summary
 from orchestrator.post.lost import drop_lost, lost_bodies
-from orchestrator.results import RESULTS, RUN_RECORD, Trajectory, write_results
+from orchestrator.results import CAMPAIGN_RECORD, RESULTS, RUN_RECORD, STUDY_RECORD, Trajectory, write_results
 
 
 
@@ -54,8 +54,17 @@ def run_case(
     options), options being how the engine runs (MPI processes), never what it computes. `plan`:
     the case's plan when the caller made it already (make_plan(case, case_dir)).
     """
+    refuse_foreign(directory)
     with rundir.locked(directory, wait=False):
         return run_locked(case, case_dir, directory, progress, timeout, adapter or get_adapter(case.engine.value, options), plan)
+
+
+def refuse_foreign(directory: Path) -> None:
+    """CaseError (one line) when `directory` holds a study (study.json) or a campaign or a study over
+    seeds (campaign.json): a run keeps a directory of its own."""
+    for record, what in ((STUDY_RECORD, "a study"), (CAMPAIGN_RECORD, "a campaign or a study over seeds")):
+        if (directory / record).exists():
+            raise CaseError(f"--output: {directory} holds {what} ({record}), not a run; a run keeps a directory of its own: choose another -o")
 
 
 def resume_point(plan: RunPlan, directory: Path, adapter: EngineAdapter | None = None, identity: str | None = None) -> Resume | None:

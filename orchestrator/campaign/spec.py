@@ -110,8 +110,17 @@ def open_campaign(path: Path) -> Campaign:
         base = read_yaml(base_path, "base case")
     except CaseError as error:
         raise CaseError(f"{path}: base: {error}") from None
-    validate_point(base_kind(spec, base), base, str(base_path))  # the base must be valid on its own
+    kind = base_kind(spec, base)
+    looks = [name for name, launch in LAUNCH_KINDS.items() if name != "case" and launch.detect(base)]
+    if spec.kind != "auto" and looks and spec.kind not in looks:  # a study of another kind: say so, not the other schema's errors
+        raise CaseError(f"{path}: kind: {spec.kind!r}, but its base {base_path.name} is {_article(looks[0])}; "
+                        f"allowed: {looks[0]!r} or auto (or a base of kind {spec.kind!r})")
+    validate_point(kind, base, str(base_path))  # the base must be valid on its own
     return Campaign(spec, base, base_path)
+
+
+def _article(kind: str) -> str:
+    return "a case" if kind == "case" else f"{'an' if kind[0] in 'aeiou' else 'a'} {kind} study"
 
 
 def load_campaign(path: Path) -> tuple[CampaignSpec, dict[str, Any]]:

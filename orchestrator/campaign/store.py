@@ -77,8 +77,13 @@ def claim(campaign_dir: Path, identity: dict[str, Any], parameters: set[str]) ->
             differs = [key for key in ("name", "base", "designs") if recorded.get(key) != identity[key]]
             held = f"campaign {recorded.get('name')!r} (base {recorded.get('base')})"
         else:
-            points = rundir.read_json(campaign_dir / POINTS) or {}
-            varied = {name for values in points.values() if isinstance(values, dict) for name in values}
+            points = rundir.read_json(campaign_dir / POINTS) if (campaign_dir / POINTS).exists() else {}
+            ours = isinstance(points, dict) and all(isinstance(values, dict) for values in points.values()) and (
+                not points or (campaign_dir / RUNS).is_dir())
+            if not ours or (not points and (campaign_dir / INDEX).exists()):
+                raise CaseError(f"--output: {campaign_dir} holds a {POINTS} or {INDEX} that no campaign wrote (no {CAMPAIGN}, no {RUNS}/ of "
+                                "its points); they would be overwritten: choose another -o")
+            varied = {name for values in points.values() for name in values}
             differs = ["varied parameters"] if points and varied != parameters else []
             held = f"another campaign (varying {sorted(varied)})"
         if differs:

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from orchestrator.case import CaseError
 from orchestrator.validation import with_engine
-from orchestrator.cli.common import console, fail, progress_callback, run_options
+from orchestrator.cli.common import console, fail, progress_callback, run_options, study_notes
 from orchestrator.engines import ENGINE_NAMES, EngineError
 from orchestrator.studies.seeds import member_seeds
 
@@ -41,11 +41,14 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
     """Pack bricks (or reuse the same packing), release them down the slope, report deposit and front against the references.
     A study with `seeds:` runs each seed (in parallel, -j) and reports each seed, the mean and the range."""
     from orchestrator.studies.avalanche.report import write_report
-    from orchestrator.studies.avalanche.study import load_study, run_study
+    from orchestrator.studies.avalanche.study import KIND, load_study, run_study
+    from orchestrator.studies.base import refuse_foreign
 
     try:
         study = with_engine(load_study(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        if study.seeds is None:
+            refuse_foreign(KIND, outdir)  # before the header: a directory of another kind, or in use, is one line
         if study.seeds is not None:
             from orchestrator.cli.ensemble import launch_ensemble
 
@@ -66,8 +69,7 @@ def avalanche(study_path: Path, engine: str | None, output: Path | None, packing
     except EngineError as error:
         fail(str(error), code=3)
     packing = report.get("packing", {})
-    if report.get("set_aside"):
-        console.print(f"[yellow]set aside[/] what {outdir} held before ({report['set_aside']['why']}): {report['set_aside']['attic']}")
+    study_notes(report, outdir)
     if report.get("finished_before"):
         console.print(f"already complete in {outdir / 'run'} (delete that directory to run it again); measured again")
     if packing.get("directory"):

@@ -87,6 +87,7 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
     directory = output or Path("runs") / "campaigns" / spec.name
     workers = jobs or os.cpu_count() or 1
     failures: list[str] = []
+    not_run: list[str] = []  # skipped for a reason other than being there already (running elsewhere, inputs changed)
     with Progress(TextColumn("[bold]{task.fields[name]}[/]"), BarColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                   transient=True) as progress:  # the tally line below stays; an error stays one line
         task = progress.add_task("planning", total=None, name=spec.name)
@@ -101,8 +102,10 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
                 + (f"  skipped {counts.skipped}" if counts.skipped else "")
                 + (f"  ETA {eta:.0f} s" if eta is not None else ""),
             )
-            if summary and summary["status"] != "completed":
+            if summary and summary["status"] == "failed":
                 failures.append(f"{summary['run_id']}: {summary.get('error', '')}")
+            elif summary and summary["status"] == "skipped" and summary.get("reason") not in ("completed", "failed", None):  # an earlier failure is counted below
+                not_run.append(f"{summary['run_id']}: {summary['reason']}")
 
         try:
             counts = run_campaign(campaign_file, directory, workers, executor, rerun_failed, dask_address, on_update=update, options=run_options(),
@@ -111,7 +114,10 @@ def _launch(campaign_file: Path, output: Path | None, jobs: int | None, executor
             fail(str(error))
     for line in failures:
         errors.print(f"[red]failed[/] {line}", markup=True, highlight=False)
-    console.print(f"{directory}: {counts.done} run, {counts.skipped} already there, {counts.failed} failed; index: {directory / 'index.parquet'}")
+    for line in not_run:
+        errors.print(f"[yellow]not run[/] {line}", markup=True, highlight=False)
+    console.print(f"{directory}: {counts.done} run, {counts.skipped - len(not_run)} already there, "
+                  + (f"{len(not_run)} not run (above), " if not_run else "") + f"{counts.failed} failed; index: {directory / 'index.parquet'}")
     from orchestrator.campaign.store import build_index
 
     index = build_index(directory)

@@ -13,7 +13,7 @@ from rich.table import Table
 
 from orchestrator.case import CaseError
 from orchestrator.validation import with_engine
-from orchestrator.cli.common import console, fail, progress_callback, run_options
+from orchestrator.cli.common import console, fail, progress_callback, run_options, study_notes
 from orchestrator.engines import ENGINE_NAMES, EngineError
 
 
@@ -79,11 +79,14 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
     """Rain the column (or reuse it), release it down the channel, report the front and the bed.
     A study with `seeds:` runs each seed (in parallel, -j) and reports each seed, the mean and the range."""
     from orchestrator.studies.collapse.spec import load_collapse
-    from orchestrator.studies.collapse.study import run_collapse
+    from orchestrator.studies.base import refuse_foreign
+    from orchestrator.studies.collapse.study import KIND as COLLAPSE_KIND, run_collapse
 
     try:
         study = with_engine(load_collapse(study_path), engine)
         outdir = output or Path("runs") / f"{study.name}-{study.engine.value}"
+        if study.seeds is None:
+            refuse_foreign(COLLAPSE_KIND, outdir)  # a directory of another kind, or in use, is one line before anything runs
         if study.seeds is not None:
             from orchestrator.cli.ensemble import launch_ensemble
 
@@ -96,8 +99,7 @@ def run_command(study_path: Path, engine: str | None, output: Path | None, prepa
         fail(str(error))
     except EngineError as error:
         fail(str(error), code=3)
-    if report.get("set_aside"):
-        console.print(f"[yellow]set aside[/] what {outdir} held before ({report['set_aside']['why']}): {report['set_aside']['attic']}")
+    study_notes(report, outdir)
     console.print(collapse_table(f"{study.name} on {study.engine.value}: α = {study.channel.slope_deg:g}°, h_i = {1000 * study.bed.erodible_thickness:g} mm", report))
     console.print(f"report: {outdir / 'report.json'}, figure: {figure}")
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import errno
 import sys
 import tempfile
 from pathlib import Path
@@ -38,6 +39,32 @@ errors = Console(stderr=True)
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
+# Conditions of the machine a user can fix (a place not writable, no space, a name too long, a
+# folder missing): one line naming the path and what to do, exit 2; anything else stays unexpected.
+_FIXES = {
+    errno.ENAMETOOLONG: "a file name there is longer than the file system allows (255 bytes a name): choose a shorter one",
+    errno.EROFS: "that file system is read-only: choose a writable place",
+    errno.EACCES: "not permitted there: choose a place you can write",
+    errno.EPERM: "not permitted there: choose a place you can write",
+    errno.ENOSPC: "no space left there: free some or choose another place (what finished is kept)",
+    errno.EDQUOT: "the disk quota is exhausted there: free some or choose another place (what finished is kept)",
+    errno.ENOENT: "no such file or folder: make the folder first, or give an existing path",
+    errno.ENOTDIR: "a part of that path is a file, not a folder: choose another path",
+}
+
+
+def os_condition(error: OSError) -> str | None:
+    """One line for an OS error a user can fix (_FIXES), or None."""
+    fix = _FIXES.get(error.errno or -1)
+    if fix is None:
+        return None
+    where = error.filename if error.filename is not None else "a file"
+    return f"{bounded(str(where), 160)}: {error.strerror or fix.split(':')[0]}; {fix}"
+
+
+DEBUG = [False]  # `demorch --debug …`: tracebacks instead of one line (set by the entry point)
+
+
 class OneLineErrors(click.Group):
     """A command group whose usage errors (unknown option, bad choice, missing argument) print one
     line, `error: …`, like every other error, instead of click's usage block; exit code 2."""
@@ -51,6 +78,10 @@ class OneLineErrors(click.Group):
             fail("interrupted", code=EXIT_UNEXPECTED)
         except Busy as error:  # a study's or a release's run directory held by another demorch: usage, not a fault
             fail(f"{error}; wait for that run or use another -o")
+        except OSError as error:  # a condition of the machine the user can fix: one line; anything else stays unexpected
+            if os_condition(error) is None or DEBUG[0]:
+                raise
+            fail(os_condition(error) or "")
         except click.ClickException as error:
             where = f" (see `{error.ctx.command_path} --help`)" if getattr(error, "ctx", None) is not None else ""
             fail(f"{error.format_message()}{where}", code=error.exit_code)
@@ -100,6 +131,16 @@ def results_path(directory: Path) -> Path:
 def default_rundir(case_name: str, engine: str) -> Path:
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path("runs") / f"{case_name}-{engine}-{stamp}"
+
+
+def study_notes(report: dict[str, Any], outdir: Path) -> None:
+    """What a study's report says of how it ran, one line each: what was set aside, and the stages
+    that continued from a checkpoint of a run cut off earlier."""
+    if report.get("set_aside"):
+        console.print(f"[yellow]set aside[/] what {outdir} held before ({report['set_aside']['why']}): {report['set_aside']['attic']}")
+    for stage, resumed in report.get("resumed", {}).items():
+        console.print(f"{stage}: continued from the checkpoint of a run cut off earlier ({resumed['segments']} segments; "
+                      f"{resumed['simulated_time_lost_s']:.3g} s of simulated time computed twice)")
 
 
 def progress_callback(progress: Progress, task: Any) -> Callable[[float, float], None]:

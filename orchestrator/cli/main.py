@@ -7,9 +7,8 @@ common holds what they share.
 
 from __future__ import annotations
 
-import math
-
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -30,6 +29,7 @@ from orchestrator.cli.paraview import paraview
 from orchestrator.cli.validation_page import validation
 from orchestrator.cli.schema import schema_command
 from orchestrator.cli.submit import slurm_job, status, submit
+from orchestrator.cli import common
 from orchestrator.cli.common import (DAMAGE, EXIT_ENGINE, EXIT_UNEXPECTED, MAX_TIMEOUT, OneLineErrors, console, damaged, errors, default_rundir, fail,
                                      metrics_table, progress_callback, results_path, run_options, warn, writable_rundir)
 from orchestrator.engines import ENGINE_NAMES, ContactBuildError, EngineError, engines_with, get_adapter
@@ -42,7 +42,7 @@ from orchestrator.post.lost import NoBodyLeft
 from orchestrator.results import REPORT, read_results
 from orchestrator.validation import bounded
 from orchestrator.results import RESULTS
-from orchestrator.runner import render_case, resume_point, run_case
+from orchestrator.runner import refuse_foreign, render_case, resume_point, run_case
 from orchestrator.rundir import is_locked as rundir_lock_held
 from orchestrator import rundir as rundir_module
 from orchestrator.capabilities import brick_gaps, capabilities
@@ -54,6 +54,7 @@ def _run(case_path: Path, engine: str | None, output: Path | None, timeout: floa
         plan = make_plan(case, case_path.parent)  # the pre-flight checks, before the progress bar: a bad case is one line
         options = _options_for(plan)
         rundir = output or default_rundir(case.name, case.engine.value)
+        refuse_foreign(rundir)
         if (rundir / RESULTS).exists():
             fail(f"{rundir} already holds a completed run; choose another -o (nothing was overwritten)")
         writable_rundir(rundir)  # first: a read-only place (/proc, say) has no free space either
@@ -292,6 +293,7 @@ def entry() -> None:
     debug = "--debug" in sys.argv[1:]
     if debug:
         sys.argv.remove("--debug")
+        common.DEBUG[0] = True
     try:
         main(standalone_mode=True)
     except Exception as error:  # noqa: BLE001 - the last guard before a user's terminal

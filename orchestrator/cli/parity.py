@@ -8,7 +8,8 @@ from pathlib import Path
 import click
 from rich.table import Table
 
-from orchestrator.cli.common import EXIT_ENGINE, console, fail
+from orchestrator.cli.common import EXIT_ENGINE, console, fail, writable_rundir
+from orchestrator.rundir import write_text_atomic
 from orchestrator.engines import ENGINE_NAMES, EngineError, get_adapter
 
 
@@ -23,6 +24,12 @@ def parity(engines: tuple[str, ...], markdown: Path | None, workdir: Path | None
     Exit 3 when a case misses that is not a known gap of its engine."""
     from orchestrator import parity as matrix
 
+    if markdown is not None:  # before the run, not after it: a folder missing or not writable is one line now
+        if markdown.is_dir():
+            fail(f"--markdown: {markdown} is a folder; give a file name (e.g. {markdown / 'parity.md'})")
+        if not markdown.parent.is_dir():
+            fail(f"--markdown: the folder {markdown.parent} does not exist; make it first, or give a path in an existing folder")
+        writable_rundir(markdown.parent, "--markdown")
     infos = {name: get_adapter(name).info() for name in (engines or ENGINE_NAMES)}
     chosen = tuple(name for name, info in infos.items() if info.executable)
     if not chosen:
@@ -43,7 +50,7 @@ def parity(engines: tuple[str, ...], markdown: Path | None, workdir: Path | None
         fail(str(error), code=EXIT_ENGINE)
     console.print(table)
     if markdown:
-        markdown.write_text(matrix.markdown(outcomes, chosen, {name: infos[name].version or "" for name in chosen}))
+        write_text_atomic(markdown, matrix.markdown(outcomes, chosen, {name: infos[name].version or "" for name in chosen}))
         console.print(f"table: {markdown}")
     misses = [o for o in outcomes if not o.passed and not o.known_gap]
     if misses:

@@ -17,7 +17,7 @@ from orchestrator.cli.common import console, errors, fail, run_options, warn, wr
 from orchestrator.engines import ENGINE_NAMES, build_stamp
 from orchestrator.engines.options import MAX_PROCESSES
 from orchestrator.plan import make_plan
-from orchestrator.results import RESULTS
+from orchestrator.results import CAMPAIGN_RECORD, CASE_COPY, RELEASE_DIR, REPORT, RESULTS, RUN_RECORD, STUDY_RECORD
 from orchestrator.slurm import record
 from orchestrator.slurm.commands import SlurmError, is_live, job_state, sbatch
 from orchestrator.slurm.job import run_command, run_job
@@ -98,7 +98,12 @@ def _refuse_a_second_chain(directory: Path) -> None:
 @click.command("status")
 @click.argument("directory", metavar="RUN_DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def status(directory: Path) -> None:
-    """The state of a run directory: its status and segments, and the SLURM jobs that ran it."""
+    """The state of a run directory: its status and segments, and the SLURM jobs that ran it (a study's
+    or a campaign's directory: what it is and the command that tells more)."""
+    other = _not_a_run(directory)
+    if other:
+        console.print(f"{directory}: {other}", highlight=False, soft_wrap=True)
+        return
     run = rundir.read_record(directory) or {}
     segments = run.get("segments") if isinstance(run.get("segments"), list) else []
     line = f"{directory}: {rundir.status(directory, builds=build_stamp)}"
@@ -118,6 +123,25 @@ def status(directory: Path) -> None:
     console.print(table)
     if jobs["jobs"][-1].get("note"):
         console.print(f"last job: {jobs['jobs'][-1]['note']}", highlight=False, soft_wrap=True)
+
+
+def _not_a_run(directory: Path) -> str | None:
+    """What `directory` holds when it is not a run's directory (a study, a campaign or a study over
+    seeds, or nothing a run left), or None for a run's."""
+    if (directory / CAMPAIGN_RECORD).exists():
+        return f"a campaign or a study over seeds; `demorch campaign status {directory}` counts its runs, `demorch post {directory}` prints its tables"
+    study = rundir.read_json(directory / STUDY_RECORD)
+    if study is not None and str((rundir.read_record(directory) or {}).get("kind", "")) != str(study.get("kind")):
+        if rundir.is_locked(directory):
+            state = "running"
+        elif (directory / REPORT).exists():
+            state = "completed" if rundir.status(directory / RELEASE_DIR, builds=build_stamp) == "completed" else "its release is stale: run it again"
+        else:
+            state = f"not finished (its release: {rundir.status(directory / RELEASE_DIR, builds=build_stamp)})"
+        return f"{study.get('kind', 'a')} study, {state}; `demorch post {directory}` prints its report"
+    if not (directory / RUN_RECORD).exists() and not (directory / CASE_COPY).exists():
+        return "not a run's directory (no run.json or case.json): nothing ran here"
+    return None
 
 
 @click.command("slurm-job")

@@ -39,6 +39,10 @@ def validation(engines: tuple[str, ...], demo: bool, page_only: bool, record_pat
             fail(f"--record: cannot read {record_path} ({error})")
     else:
         wanted = engines or engines_with(clumps=True)
+        able = engines_with(clumps=True)
+        unable = [name for name in wanted if name not in able]
+        if unable:
+            fail(f"--engine: {', '.join(unable)} cannot run the drops (a brick is a clump); engines that can: {', '.join(able)}")
         versions = {name: get_adapter(name).info() for name in wanted}
         missing = [name for name, info in versions.items() if not info.executable]
         if missing:

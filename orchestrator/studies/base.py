@@ -19,6 +19,7 @@ in the report (`set_aside`) saying why, and the study runs again.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import shutil
@@ -32,7 +33,8 @@ from pydantic import BaseModel
 from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions, build_stamp
-from orchestrator.results import RELEASE_DIR, REPORT, RESULTS, Trajectory, read_json, read_results  # noqa: F401  (the study layout, re-exported)
+from orchestrator.results import (RELEASE_DIR, REPORT, RESULTS, RUN_RECORD, STUDY_RECORD, Trajectory, read_json,  # noqa: F401  (the study layout, re-exported)
+                                  read_results)
 from orchestrator.plan import make_plan
 from orchestrator.post import overlaps
 from orchestrator.runner import audit_overlaps, ensure_run, resumable, run_case
@@ -49,7 +51,6 @@ def ensemble_row(name: str, values: dict[int, float], mean: float, reference: st
     """One ensemble row; its range over the members' finite values (NaN when none is)."""
     finite = [float(v) for v in values.values() if np.isfinite(v)]
     return (name, values, mean, min(finite) if finite else float("nan"), max(finite) if finite else float("nan"), reference, verdict)
-STUDY_RECORD = "study.json"  # the study's id, written before its release starts
 
 
 class StudyKind:
@@ -119,11 +120,12 @@ class StudyKind:
         return StudyPoint(self, self.model.model_validate_json(point_json))
 
     def run(self, study: Any, outdir: Path, progress: StageProgress | None = None, shared: Path | None = None,
-            timeout: float | None = None, options: RunOptions | None = None) -> dict[str, Any]:
+            timeout: float | None = None, options: RunOptions | None = None, held: bool = False) -> dict[str, Any]:
         """Prepare (or reuse the preparation in `shared`), release, measure; returns the report.
-        options: how the engines run (the kind's processor_grid is the default split)."""
+        options: how the engines run (the kind's processor_grid is the default split). The study holds
+        outdir's lock throughout (rundir.Busy when another process holds it); held: the caller holds it."""
         options = dataclasses.replace(options or RunOptions(), default_grid=self.processor_grid)
-        return run_study(self, study, outdir, progress, shared, timeout, options)
+        return run_study(self, study, outdir, progress, shared, timeout, options, held)
 
 
 class StudyPoint:
@@ -142,7 +144,7 @@ class StudyPoint:
         started = time.perf_counter()
         study, kind = self.inputs, self.kind
         rundir.save_inputs(directory, study)
-        report = kind.run(study, directory, shared=shared or campaign_dir / kind.shared_dir, timeout=timeout, options=options)
+        report = kind.run(study, directory, shared=shared or campaign_dir / kind.shared_dir, timeout=timeout, options=options, held=True)
         release = rundir.read_record(directory / RELEASE_DIR) or {}
         shared = report[kind.preparation]
         record = {
@@ -168,21 +170,41 @@ ENSEMBLE_MARK = "campaign.json"  # a directory holding a study's seeds (or any c
 
 
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
-              timeout: float | None, options: RunOptions) -> dict[str, Any]:
-    if (outdir / ENSEMBLE_MARK).exists():
-        raise CaseError(f"--output: {outdir} holds a study over seeds or a campaign ({ENSEMBLE_MARK}); a study of one seed keeps a "
-                        "directory of its own: choose another -o")
+              timeout: float | None, options: RunOptions, held: bool = False) -> dict[str, Any]:
+    refuse_foreign(kind, outdir, probe_lock=not held)
     created = not outdir.exists()
     try:
         outdir.mkdir(parents=True, exist_ok=True)
+        lock = contextlib.nullcontext() if held else rundir.locked(outdir, wait=False)
     except OSError as error:
         raise _unwritable(outdir, error) from None
     try:
-        return _run_study(kind, study, outdir, progress, shared, timeout, options)
+        with lock:  # one owner: taken before anything is set aside, held until the report is written
+            refuse_foreign(kind, outdir, probe_lock=False)
+            return _run_study(kind, study, outdir, progress, shared, timeout, options)
+    except rundir.Busy:
+        raise
     except BaseException:
-        if created and not any(entry.name != STUDY_RECORD for entry in outdir.iterdir()):
+        if created and not any(entry.name not in (STUDY_RECORD, *rundir.KEPT) for entry in outdir.iterdir()):
             shutil.rmtree(outdir, ignore_errors=True)  # a study that failed before making anything leaves no directory
         raise
+
+
+def refuse_foreign(kind: StudyKind, outdir: Path, probe_lock: bool = True) -> None:
+    """CaseError (one line) when `outdir` belongs to something else than a study of this kind: a
+    campaign or a study over seeds (campaign.json), a run (its run.json not a study point's), or a
+    study of the other kind (study.json); rundir.Busy when another process holds it (a study running there)."""
+    if probe_lock and outdir.is_dir() and rundir.is_locked(outdir):  # probe_lock False: the caller holds it
+        raise rundir.Busy(f"{outdir} is in use by another process")
+    if (outdir / ENSEMBLE_MARK).exists():
+        raise CaseError(f"--output: {outdir} holds a study over seeds or a campaign ({ENSEMBLE_MARK}); a study of one seed keeps a "
+                        "directory of its own: choose another -o")
+    run_kind = (read_json(outdir / RUN_RECORD) or {}).get("kind") if (outdir / RUN_RECORD).exists() else kind.name
+    if run_kind != kind.name:
+        raise CaseError(f"--output: {outdir} holds a run ({RUN_RECORD}), not a study; a study keeps a directory of its own: choose another -o")
+    study_kind = (read_json(outdir / STUDY_RECORD) or {}).get("kind", kind.name)
+    if study_kind != kind.name:
+        raise CaseError(f"--output: {outdir} holds a {study_kind} study, not a {kind.name} one: choose another -o")
 
 
 def _unwritable(outdir: Path, error: OSError) -> CaseError:
@@ -216,6 +238,18 @@ def _unsound_release(release_dir: Path) -> str | None:
     if not record.get("sealed"):
         return "was never sealed"
     return rundir.why_stale(release_dir, record)
+
+
+def _resumed(stages: dict[str, Path | None]) -> dict[str, dict[str, float]]:
+    """The stages run now that continued from a checkpoint (a run cut off earlier): how many segments
+    each took and the simulated time computed twice (their run.json `segments`)."""
+    resumed = {}
+    for stage, directory in stages.items():
+        record = (rundir.read_record(directory) or {}) if directory is not None else {}
+        segments = record.get("segments") if isinstance(record.get("segments"), list) else []
+        if len(segments) > 1:
+            resumed[stage] = {"segments": len(segments), "simulated_time_lost_s": float(record.get("simulated_time_lost_s", 0.0))}
+    return resumed
 
 
 def _refuse_nested(kind: StudyKind, prepared: Case, directory: Path, packed: Trajectory) -> None:
@@ -263,6 +297,10 @@ def _run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgres
               for stage, path in ((kind.preparation, Path(shared_record.get("directory", ""))), ("release", release_dir))}
     if any(audits.values()):
         report["overlaps"] = {stage: overlaps.summary(audit) for stage, audit in audits.items() if audit}
+    resumed = _resumed({kind.preparation: None if shared_record.get("reused") else Path(shared_record.get("directory", "")),
+                        "release": None if finished_before else release_dir})
+    if resumed:
+        report["resumed"] = resumed
     report["study"] = study.model_dump(mode="json")
     report["study_id"] = study_id
     report["build"] = build

@@ -134,7 +134,12 @@ def main(deck_path: str) -> None:
         for n in range(first, total + 1):
             for k in removals.get(n - 1, []):
                 scene.walls.active[k] = False
-            result = step(scene, dt, deck["solver"], deck["tolerance"])
+            try:
+                result = step(scene, dt, deck["solver"], deck["tolerance"])
+            except (RuntimeError, ArithmeticError) as error:  # a solver that stops short of the tolerance (mehrotra's NotConverged, Clarabel's status)
+                print(f"ERROR: step {n}: the solver stopped short of cocd.tolerance {deck['tolerance']:g} ({str(error)[:200]}); "
+                      "loosen cocd.tolerance (default 1e-8) or give another cocd.solver", flush=True)
+                sys.exit(1)
             stats["contacts"].append(result.contacts)
             stats["iterations"].append(result.iterations)
             stats["solve_s"].append(result.solve_s)

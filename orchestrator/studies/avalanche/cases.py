@@ -48,9 +48,18 @@ def _initial_layout(study: AvalancheStudy) -> tuple[np.ndarray, np.ndarray, floa
     return positions, orientations, height
 
 
+# A stage's case fields by the names the study file gives them (errors name what the user wrote).
+_STAGE_FIELDS = {
+    True: {"time.duration": "packing.settle_time", "time.safety_factor": "packing.time_safety_factor", "time.stop_at_rest": "packing.stop_at_rest",
+           "time.output_interval": "release.output_interval"},
+    False: {"time.duration": "release.duration", "time.safety_factor": "release.time_safety_factor", "time.stop_at_rest": "release.stop_at_rest",
+            "time.output_interval": "release.output_interval", "record_contacts": "release.record_contacts"},
+}
+
+
 def _case(study: AvalancheStudy, name: str, duration: float, output_interval: float, rest: RestStop | None,
           contacts: list[dict[str, Any]], clumps: list[dict[str, Any]], walls: list[dict[str, object]],
-          safety_factor: float | None = None, **extra: Any) -> Case:
+          safety_factor: float | None = None, packing: bool = False, **extra: Any) -> Case:
     spec = study.brick_spec
     return parse_case(
         {
@@ -71,7 +80,7 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
             **extra,
         },
         source=f"study {study.name}",
-        fields={"shapes.0": "brick"},
+        fields={"shapes.0": "brick", **_STAGE_FIELDS[packing]},
     )
 
 
@@ -103,7 +112,7 @@ def packing_case(study: AvalancheStudy, brick_brick_mu: float | None = None) -> 
     mu = first_packing_mu(study) if brick_brick_mu is None else brick_brick_mu
     return _case(study, "packing", study.packing.settle_time, study.release.output_interval, study.packing.stop_at_rest,
                  _contacts(study.packing.contacts or study.contacts, mu), clumps, walls, study.packing.time_safety_factor,
-                 gravity=list(geometry.packing_gravity()), save_state=capabilities(study.engine).restart)
+                 packing=True, gravity=list(geometry.packing_gravity()), save_state=capabilities(study.engine).restart)
 
 
 def release_case(study: AvalancheStudy, packed: Trajectory, state_file: Path | None) -> Case:

@@ -16,7 +16,7 @@ from pydantic import Field, model_validator
 from orchestrator.bodies import MIN_SIZE, Brick, BrickShape, ShapeKind
 from orchestrator.case import Name, Real, RestStop, Strict
 from orchestrator.capabilities import refused_kinds
-from orchestrator.engines import DEFAULT_ENGINE, Engine, capabilities
+from orchestrator.engines import DEFAULT_ENGINE, ENGINE_NAMES, Engine, capabilities
 from orchestrator.shapes import BodyShape
 from orchestrator.studies.seeds import Seeds, member_seeds
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, brick_count
@@ -122,7 +122,7 @@ class PackingSpec(Strict):
     # Default: the engine's, as in the release. The packing only makes the initial state (its
     # density and fabric are what the release sees), so it may run at a coarser step than the flow;
     # docs/bricks.md gives the measured case (rounded boxes packed at the superquadric's step).
-    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) | None = None
+    time_safety_factor: Real(unit="1", ge=1e-3, le=0.1) | None = None  # as time.safety_factor: at most 0.1
     density_search: DensitySearchSpec = DensitySearchSpec()
     # Ordered pile only: turn each brick half a turn about a random axis, or not (the paper's flips).
     flips: bool = False
@@ -146,7 +146,7 @@ class ReleaseSpec(Strict):
     # The flow's Δt as a fraction of the shortest contact duration (a case's time.safety_factor).
     # Default: the engine's (0.02 on LIGGGHTS: 50 steps per contact). The step study of
     # docs/benchmarks.md measures deposits and a brick's rebound at 1×, 1.5× and 2× it.
-    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) | None = None
+    time_safety_factor: Real(unit="1", ge=1e-3, le=0.1) | None = None  # as time.safety_factor: at most 0.1
 
 
 class AvalancheStudy(Strict):
@@ -169,6 +169,47 @@ class AvalancheStudy(Strict):
                 f"packing.contacts.law: must be {self.contacts.law!r} like contacts.law "
                 "(the flow continues the packing's contact history)"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _engine_takes_brick(self) -> "AvalancheStudy":
+        """The brick's kind on the study's engine, with the study's own fields named, before any engine starts."""
+        kind, engine = self.brick_spec.kind, self.engine.value
+        can = capabilities(engine)
+        if kind not in can.shape_kinds:
+            able = [name for name in ENGINE_NAMES if kind in capabilities(name).shape_kinds]
+            raise ValueError(f"brick.kind: {engine} takes {', '.join(can.shape_kinds)} bricks, not {kind}; engines that can: {', '.join(able)}")
+        refused = refused_kinds(engine, self.contacts.law, self.release.record_contacts).get(str(kind))
+        if refused == "record_contacts":
+            raise ValueError(f"release.record_contacts: {engine} does not record the contacts of {kind} bricks; allowed: false "
+                             f"(or a brick.kind that records them: {', '.join(k for k in can.shape_kinds if k not in can.unrecorded_kinds)})")
+        if refused == "contacts.law":
+            raise ValueError(f"contacts.law: {kind} bricks touch by the bilinear law of Richefeu et al. (2012) only on {engine}; "
+                             f"allowed: bilinear (got {self.contacts.law})")
+        return self
+
+    @model_validator(mode="after")
+    def _denser_than_bricks(self) -> "AvalancheStudy":
+        """A pile of bricks cannot be denser than the bricks: apparent density = solid fraction × brick density."""
+        if self.target_density >= self.brick.density:
+            raise ValueError(f"packing.apparent_density: {self.target_density:g} kg/m³ is not below the bricks' own density "
+                             f"({self.brick.density:g} kg/m³, brick.density); allowed: below {self.brick.density:g} (the experiment's "
+                             "random pour: 1000, its ordered pile: 1576)")
+        return self
+
+    @model_validator(mode="after")
+    def _first_trial_in_bounds(self) -> "AvalancheStudy":
+        """A density search's first trial (μ brick/brick while packing) lies within its bounds."""
+        search, packing = self.packing.density_search, self.packing
+        if search.max_trials == 1:
+            return self
+        mu = packing.brick_brick_mu if packing.brick_brick_mu is not None else (packing.contacts or self.contacts).brick_brick.mu
+        low, high = search.mu_bounds
+        if not low <= mu <= high:
+            field = ("packing.brick_brick_mu" if packing.brick_brick_mu is not None
+                     else "packing.contacts.brick_brick.mu" if packing.contacts is not None else "contacts.brick_brick.mu")
+            raise ValueError(f"{field}: {mu:g} starts the density search outside packing.density_search.mu_bounds [{low:g}, {high:g}]; "
+                             f"allowed: within them (or widen the bounds, or set packing.density_search.max_trials: 1 to pack once)")
         return self
 
     @model_validator(mode="after")

@@ -102,7 +102,7 @@ class CollapseStudy(StudyEngineSections, Strict):
     fields: FieldsSpec = FieldsSpec()  # where the depth profiles and the erosion waves are read
     # Δt = safety_factor × the shortest contact duration: 20 steps per contact. Halving it moved the
     # default runout by less than the grain size (see docs/studies/collapse.md).
-    time_safety_factor: Real(unit="1", gt=0.0, le=0.5) = 0.05
+    time_safety_factor: Real(unit="1", ge=1e-3, le=0.1) = 0.05  # as a case's time.safety_factor: at most 0.1
     # The sections one engine reads (its solver, the step of an implicit engine) come from StudyEngineSections.
 
     @model_validator(mode="after")
