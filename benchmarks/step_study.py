@@ -27,7 +27,6 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from orchestrator.campaign.store import build_index  # noqa: E402
 from orchestrator.case import parse_case  # noqa: E402
 from orchestrator.engines import RunOptions  # noqa: E402
 from orchestrator.physics import schedule  # noqa: E402
@@ -58,14 +57,18 @@ def pair_rebound(safety_factor: float) -> tuple[float, float]:
 
 
 def main(campaign_dir: Path) -> None:
-    index = build_index(campaign_dir)
-    index = index[(index["status"] == "completed") & ~index.get("superseded", False)]
-    factors = sorted(float(f) for f in index[FACTOR].unique())
+    # each point's parameters (points.json) and its finished study's report (runs/<id>/report.json)
+    points = json.loads((campaign_dir / "points.json").read_text())
     deposits: dict[str, dict[str, dict[str, float]]] = {}
-    for factor in factors:
-        rows = index[index[FACTOR] == factor]
-        deposits[f"{factor:g}"] = {metric: {str(int(seed)): float(value) for seed, value in zip(rows["seed"], rows[metric])}
-                                   for metric in METRICS}
+    for run, parameters in points.items():
+        report_path = campaign_dir / "runs" / run / "report.json"
+        if not report_path.is_file():
+            continue
+        deposit = json.loads(report_path.read_text())["deposit"]
+        factor = f"{float(parameters[FACTOR]):g}"
+        for metric in METRICS:
+            deposits.setdefault(factor, {}).setdefault(metric, {})[str(parameters["seed"])] = float(deposit[metric.split(".")[1]])
+    factors = sorted(float(f) for f in deposits)
     reference = deposits[f"{DEFAULT:g}"]
     verdicts: dict[str, dict[str, bool]] = {}
     for factor, values in deposits.items():

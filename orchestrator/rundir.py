@@ -255,7 +255,7 @@ def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseMo
               expected_id: str | None = None) -> str | None:
     """None when the completed run in `directory` may stand for its inputs today; else why not, in a
     few words: its saved inputs do not hash to its recorded id with its recorded build, its id is
-    not `expected_id` (the id its directory stands for), a sealed output changed, or its build is not
+    not `expected_id` (the id its directory stands for), its results were never sealed, a sealed output changed, or its build is not
     today's (`builds`: engine → today's build stamp; None: not checked)."""
     build = record.get("build")
     if "run_id" not in record or not isinstance(build, dict):
@@ -269,7 +269,10 @@ def why_stale(directory: Path, record: dict[str, Any], inputs_model: type[BaseMo
     files = record.get("files", {})
     if not isinstance(files, dict) or run_id(inputs, build, files=files) != record["run_id"]:
         return f"its {CASE_COPY} does not hash to its run id"
-    broken = [name for name, value in (record.get("sealed") or {}).items() if _file_digest(directory / name) != value]
+    sealed = record.get("sealed")
+    if not isinstance(sealed, dict) or str(record.get("results", RESULTS)) not in sealed:  # a missing seal is a stale record, not a trusted one
+        return "its results were never sealed"
+    broken = [name for name, value in sealed.items() if _file_digest(directory / name) != value]
     if broken:
         return f"{', '.join(broken)} changed since it was sealed"
     if builds is not None and build != builds(str(build.get("engine", ""))):

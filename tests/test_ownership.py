@@ -126,3 +126,15 @@ def test_status_says_what_a_directory_holds(tmp_path: Path) -> None:
     (campaign / "campaign.json").write_text("{}")
     code, output, _, _ = run_cli(["status", str(campaign)])
     assert "a campaign or a study over seeds" in output
+
+
+def test_a_completed_record_without_seals_is_stale_not_trusted(tmp_path: Path) -> None:
+    """A packing whose run.json lacked `sealed` was reused unchecked, then failed in LIGGGHTS' read_restart."""
+    record = {"run_id": "x", "build": {"engine": "liggghts"}, "status": "completed"}
+    (tmp_path / "case.json").write_text(json.dumps(case_data()))
+    assert rundir.why_stale(tmp_path, record) == "its results were never sealed" or "hash" in str(rundir.why_stale(tmp_path, record))
+    from orchestrator.rundir import run_id
+    from orchestrator.case import parse_case
+    record["run_id"] = run_id(parse_case(case_data()), record["build"])
+    assert rundir.why_stale(tmp_path, record) == "its results were never sealed"
+    assert rundir.why_stale(tmp_path, {**record, "sealed": {}}) == "its results were never sealed"

@@ -78,11 +78,9 @@ def claim(campaign_dir: Path, identity: dict[str, Any], parameters: set[str]) ->
             held = f"campaign {recorded.get('name')!r} (base {recorded.get('base')})"
         else:
             points = rundir.read_json(campaign_dir / POINTS) if (campaign_dir / POINTS).exists() else {}
-            ours = isinstance(points, dict) and all(isinstance(values, dict) for values in points.values()) and (
-                not points or (campaign_dir / RUNS).is_dir())
+            ours = isinstance(points, dict) and all(isinstance(values, dict) for values in points.values())  # run id → its parameters
             if not ours or (not points and (campaign_dir / INDEX).exists()):
-                raise CaseError(f"--output: {campaign_dir} holds a {POINTS} or {INDEX} that no campaign wrote (no {CAMPAIGN}, no {RUNS}/ of "
-                                "its points); they would be overwritten: choose another -o")
+                raise CaseError(f"--output: {campaign_dir} holds a {POINTS} or {INDEX} that no campaign wrote (no {CAMPAIGN}, and no points a campaign writes); they would be overwritten: choose another -o")
             varied = {name for values in points.values() for name in values}
             differs = ["varied parameters"] if points and varied != parameters else []
             held = f"another campaign (varying {sorted(varied)})"

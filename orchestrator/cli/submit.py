@@ -139,7 +139,7 @@ def _not_a_run(directory: Path) -> str | None:
         else:
             state = f"not finished (its release: {rundir.status(directory / RELEASE_DIR, builds=build_stamp)})"
         return f"{study.get('kind', 'a')} study, {state}; `demorch post {directory}` prints its report"
-    if not (directory / RUN_RECORD).exists() and not (directory / CASE_COPY).exists():
+    if not any((directory / name).exists() for name in (RUN_RECORD, CASE_COPY, rundir.JOBS)):  # a submitted run has its jobs first
         return "not a run's directory (no run.json or case.json): nothing ran here"
     return None
 
