@@ -176,6 +176,9 @@ class AvalancheStudy(Strict):
         """The brick's kind on the study's engine, with the study's own fields named, before any engine starts."""
         kind, engine = self.brick_spec.kind, self.engine.value
         can = capabilities(engine)
+        if not can.clumps:
+            raise ValueError(f"engine: {engine} takes spheres only, not bricks; engines that can: "
+                             f"{', '.join(name for name in ENGINE_NAMES if capabilities(name).clumps)}")
         if kind not in can.shape_kinds:
             able = [name for name in ENGINE_NAMES if kind in capabilities(name).shape_kinds]
             raise ValueError(f"brick.kind: {engine} takes {', '.join(can.shape_kinds)} bricks, not {kind}; engines that can: {', '.join(able)}")
