@@ -79,9 +79,10 @@ class OneLineErrors(click.Group):
         except Busy as error:  # a study's or a release's run directory held by another demorch: usage, not a fault
             fail(f"{error}; wait for that run or use another -o")
         except OSError as error:  # a condition of the machine the user can fix: one line; anything else stays unexpected
-            if os_condition(error) is None or DEBUG[0]:
+            line = os_condition(error)
+            if line is None or DEBUG[0]:
                 raise
-            fail(os_condition(error) or "")
+            fail(line)
         except click.ClickException as error:
             where = f" (see `{error.ctx.command_path} --help`)" if getattr(error, "ctx", None) is not None else ""
             fail(f"{error.format_message()}{where}", code=error.exit_code)

@@ -33,7 +33,7 @@ from pydantic import BaseModel
 from orchestrator import rundir
 from orchestrator.case import Case, CaseError, parse_model, read_yaml
 from orchestrator.engines import RunOptions, build_stamp
-from orchestrator.results import (RELEASE_DIR, REPORT, RESULTS, RUN_RECORD, STUDY_RECORD, Trajectory, read_json,  # noqa: F401  (the study layout, re-exported)
+from orchestrator.results import (CAMPAIGN_RECORD, RELEASE_DIR, REPORT, RESULTS, RUN_RECORD, STUDY_RECORD, Trajectory, read_json,  # noqa: F401  (the study layout, re-exported)
                                   read_results)
 from orchestrator.plan import make_plan
 from orchestrator.post import overlaps
@@ -166,7 +166,6 @@ class StudyPoint:
         return record
 
 
-ENSEMBLE_MARK = "campaign.json"  # a directory holding a study's seeds (or any campaign) has one (campaign.store.CAMPAIGN)
 
 
 def run_study(kind: StudyKind, study: Any, outdir: Path, progress: StageProgress | None, shared: Path | None,
@@ -196,8 +195,8 @@ def refuse_foreign(kind: StudyKind, outdir: Path, probe_lock: bool = True) -> No
     study of the other kind (study.json); rundir.Busy when another process holds it (a study running there)."""
     if probe_lock and outdir.is_dir() and rundir.is_locked(outdir):  # probe_lock False: the caller holds it
         raise rundir.Busy(f"{outdir} is in use by another process")
-    if (outdir / ENSEMBLE_MARK).exists():
-        raise CaseError(f"--output: {outdir} holds a study over seeds or a campaign ({ENSEMBLE_MARK}); a study of one seed keeps a "
+    if (outdir / CAMPAIGN_RECORD).exists():
+        raise CaseError(f"--output: {outdir} holds a study over seeds or a campaign ({CAMPAIGN_RECORD}); a study of one seed keeps a "
                         "directory of its own: choose another -o")
     run_kind = (read_json(outdir / RUN_RECORD) or {}).get("kind") if (outdir / RUN_RECORD).exists() else kind.name
     if run_kind != kind.name:

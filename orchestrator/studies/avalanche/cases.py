@@ -85,10 +85,8 @@ def _case(study: AvalancheStudy, name: str, duration: float, output_interval: fl
 
 
 def first_packing_mu(study: AvalancheStudy) -> float:
-    """μ brick/brick of the packing's first trial: `packing.brick_brick_mu`, else the packing's contacts'."""
-    if study.packing.brick_brick_mu is not None:
-        return study.packing.brick_brick_mu
-    return (study.packing.contacts or study.contacts).brick_brick.mu
+    """μ brick/brick of the packing's first trial (AvalancheStudy.first_packing_mu)."""
+    return study.first_packing_mu
 
 
 def packing_case(study: AvalancheStudy, brick_brick_mu: float | None = None) -> Case:

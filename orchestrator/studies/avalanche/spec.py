@@ -206,7 +206,7 @@ class AvalancheStudy(Strict):
         search, packing = self.packing.density_search, self.packing
         if search.max_trials == 1:
             return self
-        mu = packing.brick_brick_mu if packing.brick_brick_mu is not None else (packing.contacts or self.contacts).brick_brick.mu
+        mu = self.first_packing_mu
         low, high = search.mu_bounds
         if not low <= mu <= high:
             field = ("packing.brick_brick_mu" if packing.brick_brick_mu is not None
@@ -250,6 +250,13 @@ class AvalancheStudy(Strict):
                 raise ValueError(f"geometry.{name}: {getattr(g, name)!r} m holds less than {'two bricks' if name != 'box_height' else 'one brick'} "
                                  f"of {'a random pour' if self.packing.kind == 'random_pour' else 'an ordered pile'} ({least:.4g} m); allowed: at least {least:.4g} m")
         return self
+
+    @property
+    def first_packing_mu(self) -> float:
+        """μ brick/brick of the packing's first trial: `packing.brick_brick_mu`, else the packing's contacts'."""
+        if self.packing.brick_brick_mu is not None:
+            return self.packing.brick_brick_mu
+        return (self.packing.contacts or self.contacts).brick_brick.mu
 
     @property
     def target_density(self) -> float:
