@@ -38,7 +38,7 @@ grep -q "numneigh != NULL" "$src/finish.cpp" || { echo "finish.cpp fix did not a
 # stop before the bilinear law, and compiling hundreds of combinations is most of the build time.
 cp "$here/normal_model_bilinear.h" "$src/"
 # Rounded boxes: pair_style roundedbox, fix wall/roundedbox and their per-atom contact history.
-cp "$here"/roundedbox_geometry.h "$here"/roundedbox_law.h "$here"/pair_roundedbox.* "$here"/fix_wall_roundedbox.* "$here"/fix_roundedbox_history.* "$src/"
+cp "$here"/roundedbox_geometry.h "$here"/roundedbox_candidates.h "$here"/roundedbox_law.h "$here"/pair_roundedbox.* "$here"/fix_wall_roundedbox.* "$here"/fix_roundedbox_history.* "$src/"
 {
   for surface in SURFACE_DEFAULT SURFACE_SUPERQUADRIC; do
     for tangential in TANGENTIAL_HISTORY TANGENTIAL_NO_HISTORY; do

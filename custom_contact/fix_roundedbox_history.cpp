@@ -32,21 +32,32 @@ void FixRoundedBoxHistory::begin(int nlocal)
 }
 
 namespace {
-// slots are kept sorted by (partner, key): a brick in a pile has a hundred, looked up 16 times a pair
+// restart files and exchanges keep the slots sorted by (partner, key)
 bool slotBefore(const FixRoundedBoxHistory::Slot &a, const FixRoundedBoxHistory::Slot &b)
 {
   return a.partner < b.partner || (a.partner == b.partner && a.key < b.key);
 }
 }
 
+/* Slots are looked up by a walk (an atom has a few dozen), so no sort is needed between steps. An
+ * atom's slots with one partner atom lie together, in increasing key order (pair roundedbox stores a
+ * pair's sub-contacts in one go, in key order): the walk stops at the first run. */
+void FixRoundedBoxHistory::partner_slots(int i, double partner, const Slot *&first, const Slot *&last) const
+{
+  const std::vector<Slot> &slots = current_[i];
+  const Slot *begin = slots.data(), *end = begin + slots.size();
+  first = begin;
+  while (first != end && first->partner != partner) first++;
+  last = first;
+  while (last != end && last->partner == partner) last++;
+}
+
 const RoundedBox::History *FixRoundedBoxHistory::find(int i, double partner, int key) const
 {
   const std::vector<Slot> &slots = current_[i];
-  Slot wanted;
-  wanted.partner = partner;
-  wanted.key = key;
-  std::vector<Slot>::const_iterator at = std::lower_bound(slots.begin(), slots.end(), wanted, slotBefore);
-  return at != slots.end() && at->partner == partner && at->key == key ? &at->history : NULL;
+  for (size_t s = 0; s < slots.size(); s++)
+    if (slots[s].partner == partner && slots[s].key == key) return &slots[s].history;
+  return NULL;
 }
 
 void FixRoundedBoxHistory::store(int i, double partner, int key, const RoundedBox::History &history)
@@ -62,10 +73,7 @@ void FixRoundedBoxHistory::store(int i, double partner, int key, const RoundedBo
 
 void FixRoundedBoxHistory::commit(int nlocal)
 {
-  for (int i = 0; i < nlocal; i++) {
-    std::sort(next_[i].begin(), next_[i].end(), slotBefore);
-    current_[i].swap(next_[i]);
-  }
+  for (int i = 0; i < nlocal; i++) current_[i].swap(next_[i]);
 }
 
 void FixRoundedBoxHistory::grow_arrays(int nmax)

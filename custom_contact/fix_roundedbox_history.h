@@ -41,6 +41,8 @@ class FixRoundedBoxHistory : public Fix {
   // one force computation: begin, then look up and store per sub-contact, then commit
   void begin(int nlocal);
   const RoundedBox::History *find(int i, double partner, int key) const;
+  // the slots of atom i with one partner atom, in increasing key order: [*first, *last)
+  void partner_slots(int i, double partner, const Slot *&first, const Slot *&last) const;
   void store(int i, double partner, int key, const RoundedBox::History &history);
   void commit(int nlocal);
   int touching(int i) const { return static_cast<int>(current_[i].size()); }

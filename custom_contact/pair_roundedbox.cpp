@@ -21,7 +21,7 @@
 using namespace LAMMPS_NS;
 using namespace RoundedBox;
 
-PairRoundedBox::PairRoundedBox(LAMMPS *lmp) : Pair(lmp), rounding_(-1.0), reach_(0.0), constants_(NULL), history_(NULL)
+PairRoundedBox::PairRoundedBox(LAMMPS *lmp) : Pair(lmp), rounding_(-1.0), reach_(0.0), constants_(NULL), history_(NULL), skin_(0.0)
 {
   single_enable = 0;
   restartinfo = 0;
@@ -57,6 +57,9 @@ void PairRoundedBox::settings(int narg, char **arg)
     error->all(FLERR, "Illegal pair_style roundedbox command: expected `pair_style roundedbox rounding R` (R in m)");
   rounding_ = force->numeric(FLERR, arg[1]);
   if (rounding_ <= 0.0) error->all(FLERR, "pair_style roundedbox: the rounding R must be > 0 (m)");
+  // a pair lists its features within the reach (2 R) plus R / 5: on a packed slab of the study's
+  // bricks (R = 1 mm) 0.1 and 0.2 mm were fastest, 0.05 and 0.5 mm 5 to 10 % slower
+  skin_ = 0.2 * rounding_;
 }
 
 void PairRoundedBox::coeff(int narg, char **arg)
@@ -145,6 +148,34 @@ double PairRoundedBox::init_one(int, int)
   return 2.0 * reach_;
 }
 
+void PairRoundedBox::track_motion(int nall, bool rebuilt)
+{
+  double **x = atom->x, **q = atom->quaternion;
+  if (static_cast<int>(travel_.size()) < nall) {
+    travel_.resize(nall);
+    last_x_.resize(3 * nall);
+    last_q_.resize(4 * nall);
+  }
+  for (int i = 0; i < nall; i++) {
+    double *lx = &last_x_[3 * i], *lq = &last_q_[4 * i];
+    if (rebuilt) travel_[i] = 0.0;
+    else {
+      // a point at distance rho from the centre moves by at most |dx| + 2 rho min(|q - q'|, |q + q'|)
+      // under a rotation from unit quaternion q' to q (its chord is 2 rho sin(angle / 2))
+      double dx = 0.0, minus = 0.0, plus = 0.0;
+      for (int k = 0; k < 3; k++) dx += (x[i][k] - lx[k]) * (x[i][k] - lx[k]);
+      for (int k = 0; k < 4; k++) {
+        minus += (q[i][k] - lq[k]) * (q[i][k] - lq[k]);
+        plus += (q[i][k] + lq[k]) * (q[i][k] + lq[k]);
+      }
+      const double moved = std::sqrt(dx) + 2.0 * boxes_[i].bound * std::sqrt(MIN(minus, plus));
+      travel_[i] += moved * (1.0 + 1e-6) + 1e-15;
+    }
+    for (int k = 0; k < 3; k++) lx[k] = x[i][k];
+    for (int k = 0; k < 4; k++) lq[k] = q[i][k];
+  }
+}
+
 void PairRoundedBox::compute(int eflag, int vflag)
 {
   if (eflag || vflag) ev_setup(eflag, vflag);
@@ -163,21 +194,57 @@ void PairRoundedBox::compute(int eflag, int vflag)
   const int nall = nlocal + atom->nghost;
   if (static_cast<int>(boxes_.size()) < nall) boxes_.resize(nall);
   for (int i = 0; i < nall; i++) body(atom, i, rounding_, boxes_[i]);
+  int entries = 0;
+  for (int ii = 0; ii < list->inum; ii++) entries += list->numneigh[list->ilist[ii]];
+  const bool rebuilt = neighbor->ago == 0 || static_cast<int>(entries_.size()) != entries;
+  track_motion(nall, rebuilt);
+  if (rebuilt) {
+    const Entry unknown = { -1.0, 0.0, -1, false };
+    entries_.assign(entries, unknown);
+    lists_.clear();
+  }
   SubContact sub[MAX_PAIR];
   History next;
+  int entry = 0;
   for (int ii = 0; ii < list->inum; ii++) {
     const int i = list->ilist[ii];
     const int *neighbours = list->firstneigh[i];
-    for (int jj = 0; jj < list->numneigh[i]; jj++) {
+    for (int jj = 0; jj < list->numneigh[i]; jj++, entry++) {
       const int j = neighbours[jj] & NEIGHMASK;
+      Entry &known = entries_[entry];
+      const double travelled = travel_[i] + travel_[j];
+      // still apart: their travels since they were last parted cannot have closed the distance
+      if (known.apart > travelled - known.travel) continue;
       // A is the lower tag: the same pair gives the same numbers on every process
       const bool i_first = tag[i] < tag[j];
       const int a = i_first ? i : j, b = i_first ? j : i;
-      const int n = boxBoxContacts(boxes_[a], boxes_[b], sub);
+      int n;
+      if (known.listed && travelled - known.travel < skin_)
+        n = candidateContacts(boxes_[a], boxes_[b], &lists_[known.list + 1], lists_[known.list], sub);
+      else {
+        known.travel = travelled;
+        known.listed = false;
+        const double apart = boxesApart(boxes_[a], boxes_[b]);
+        // 1e-12 m below it: the distance is found to round-off of coordinates of a few metres
+        known.apart = apart > 0.0 ? apart - 1e-12 : -1.0;
+        if (apart > 0.0) continue;
+        if (known.list < 0) {
+          known.list = static_cast<int>(lists_.size());
+          lists_.resize(lists_.size() + 1 + MAX_CANDIDATES);
+        }
+        unsigned char *listed = &lists_[known.list];
+        const int count = candidates(boxes_[a], boxes_[b], skin_, listed + 1);
+        known.listed = count >= 0;
+        listed[0] = static_cast<unsigned char>(known.listed ? count : 0);
+        n = known.listed ? candidateContacts(boxes_[a], boxes_[b], listed + 1, count, sub) : boxBoxContacts(boxes_[a], boxes_[b], sub);
+      }
       if (!n) continue;
       const Constants &k = constants_[type[a]][type[b]];
       const bool j_local = j < nlocal;
       double total[3] = { 0.0, 0.0, 0.0 }, torque_a[3] = { 0.0, 0.0, 0.0 }, torque_b[3] = { 0.0, 0.0, 0.0 };
+      const double partner = static_cast<double>(tag[j]);
+      const FixRoundedBoxHistory::Slot *slot, *slots_end;  // i's slots with j, walked as the keys rise
+      history_->partner_slots(i, partner, slot, slots_end);
       for (int s = 0; s < n; s++) {
         const SubContact &c = sub[s];
         double ra[3], rb[3], wa[3], wb[3], relative[3], force[3], moment[3];
@@ -185,10 +252,11 @@ void PairRoundedBox::compute(int eflag, int vflag)
         cross(omega[a], ra, wa);
         cross(omega[b], rb, wb);
         for (int m = 0; m < 3; m++) relative[m] = v[a][m] + wa[m] - v[b][m] - wb[m];
-        const History *previous = history_->find(i, static_cast<double>(tag[j]), c.key);
+        while (slot != slots_end && slot->key < c.key) slot++;
+        const History *previous = slot != slots_end && slot->key == c.key ? &slot->history : NULL;
         subContactForce(c, relative, k, dt, previous, next, force);
         if (keep) {
-          history_->store(i, static_cast<double>(tag[j]), c.key, next);
+          history_->store(i, partner, c.key, next);
           if (j_local) history_->store(j, static_cast<double>(tag[i]), c.key, next);
         }
         for (int m = 0; m < 3; m++) total[m] += force[m];

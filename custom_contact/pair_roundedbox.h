@@ -20,6 +20,7 @@ PairStyle(roundedbox,PairRoundedBox)
 
 #include <vector>
 #include "pair.h"
+#include "roundedbox_candidates.h"
 #include "roundedbox_law.h"
 
 namespace LAMMPS_NS {
@@ -43,6 +44,23 @@ class PairRoundedBox : public Pair {
   RoundedBox::Constants **constants_;
   class FixRoundedBoxHistory *history_;
   std::vector<RoundedBox::Box> boxes_;  // per local and ghost body, remade each step
+  // Verlet's idea with a motion bound: since the last neighbour list, how far any point of each body
+  // may have moved (m), from its centre's travel and its rotation (travel_); per neighbour-list
+  // entry, what was known of the pair and the two bodies' travel then. A pair found apart is tested
+  // again once their travels since could close that distance; a pair near or touching keeps the
+  // features within the reach plus skin_ (roundedbox_candidates.h: a list in lists_) until their
+  // travels since could exceed the skin.
+  struct Entry {
+    double apart;          // a lower bound of the distance when found apart (m), else -1
+    double travel;         // the two bodies' travel then (m)
+    int list;              // index of its list in lists_ (-1: none; count first, then the keys)
+    bool listed;           // the list holds the features within reach of `travel`
+  };
+  double skin_;
+  std::vector<double> travel_, last_x_, last_q_;
+  std::vector<Entry> entries_;
+  std::vector<unsigned char> lists_;
+  void track_motion(int nall, bool rebuilt);
   void allocate();
 };
 

@@ -100,27 +100,45 @@ inline void relativeFrame(const Box &A, const Box &B, Pose &p)
   }
 }
 
+/* What the vertices in the other's frame are made of: A's centre in B's frame, and each box's half
+ * extents along its axes in the other's frame ([k]: along axis k). */
+struct Axes {
+  double a_centre[3], a_axes[3][3], b_axes[3][3];
+};
+
+inline void relativeAxes(const Box &A, const Box &B, const Pose &p, Axes &x)
+{
+  for (int j = 0; j < 3; j++) x.a_centre[j] = -(p.R[0][j] * p.t[0] + p.R[1][j] * p.t[1] + p.R[2][j] * p.t[2]);
+  for (int k = 0; k < 3; k++)
+    for (int m = 0; m < 3; m++) {
+      x.b_axes[k][m] = B.h[k] * p.R[m][k];  // B's axis k in A's frame: column k
+      x.a_axes[k][m] = A.h[k] * p.R[k][m];  // A's axis k in B's frame: row k
+    }
+}
+
+/* Vertex v of B in A's frame (b_in_a) or of A in B's frame, summed in one order: the same numbers
+ * whether one vertex or all are made. */
+inline void vertexInOther(const double *centre, const double (*axes)[3], int v, double *out)
+{
+  for (int m = 0; m < 3; m++) {
+    double w = centre[m];
+    for (int k = 0; k < 3; k++) {
+      if ((v >> k) & 1) w += axes[k][m];
+      else w -= axes[k][m];
+    }
+    out[m] = w;
+  }
+}
+
 /* Each box's inner vertices in the other's frame, from the relative frame. */
 inline void relativeVertices(const Box &A, const Box &B, Pose &p)
 {
-  double a_centre[3];  // A's centre in B's frame
-  for (int j = 0; j < 3; j++) a_centre[j] = -(p.R[0][j] * p.t[0] + p.R[1][j] * p.t[1] + p.R[2][j] * p.t[2]);
-  double b_axes[3][3], a_axes[3][3];  // [k]: the half extent along axis k, in the other's frame
-  for (int k = 0; k < 3; k++)
-    for (int m = 0; m < 3; m++) {
-      b_axes[k][m] = B.h[k] * p.R[m][k];  // B's axis k in A's frame: column k
-      a_axes[k][m] = A.h[k] * p.R[k][m];  // A's axis k in B's frame: row k
-    }
-  for (int v = 0; v < 8; v++)
-    for (int m = 0; m < 3; m++) {
-      double b = p.t[m], a = a_centre[m];
-      for (int k = 0; k < 3; k++) {
-        if ((v >> k) & 1) { b += b_axes[k][m]; a += a_axes[k][m]; }
-        else { b -= b_axes[k][m]; a -= a_axes[k][m]; }
-      }
-      p.b_in_a[v][m] = b;
-      p.a_in_b[v][m] = a;
-    }
+  Axes x;
+  relativeAxes(A, B, p, x);
+  for (int v = 0; v < 8; v++) {
+    vertexInOther(p.t, x.b_axes, v, p.b_in_a[v]);
+    vertexInOther(x.a_centre, x.a_axes, v, p.a_in_b[v]);
+  }
 }
 
 /* Whether a point (coordinates u in a box's frame) lies inside the box, to 1e-9 of its half extents. */
@@ -208,7 +226,7 @@ inline bool inEdgeCone(const double *components, int e)
   return first >= -tolerance && second >= -tolerance;
 }
 
-/* Edge ea of A against edge eb of B, in A's frame. */
+/* Edge ea of A against edge eb of B, in A's frame, once edgePairMayTouch let them through. */
 inline bool edgeAgainstEdge(const Box &A, int ea, const Box &B, int eb, const Pose &p, int key, SubContact &out)
 {
   const int ka = ea / 4, kb = eb / 4;
@@ -217,12 +235,7 @@ inline bool edgeAgainstEdge(const Box &A, int ea, const Box &B, int eb, const Po
   const int start = edgeStart(ea);
   for (int m = 0; m < 3; m++) a0[m] = (start >> m) & 1 ? A.h[m] : -A.h[m];
   const double *b0 = p.b_in_a[edgeStart(eb)], *b1 = p.b_in_a[edgeEnd(eb)];
-  // the boxes around the two segments, grown by the reach, must meet (most pairs fail here)
   const double reach = A.r + B.r;
-  for (int m = 0; m < 3; m++) {
-    const double low = m == ka ? -A.h[m] : a0[m], high = m == ka ? A.h[m] : a0[m];
-    if (low > std::max(b0[m], b1[m]) + reach || high < std::min(b0[m], b1[m]) - reach) return false;
-  }
   const double db[3] = { p.R[0][kb], p.R[1][kb], p.R[2][kb] };  // A's edge runs along A's axis ka
   const double w0[3] = { a0[0] - b0[0], a0[1] - b0[1], a0[2] - b0[2] };
   const double cosine = db[ka], d = w0[ka], e = dot(db, w0);
@@ -270,10 +283,49 @@ inline bool edgeAgainstEdge(const Box &A, int ea, const Box &B, int eb, const Po
   return true;
 }
 
-/* Whether the two outer boxes (inner half extents + rounding) are apart along one of the 15 axes of
- * the separating axis test (Gottschalk, Lin & Manocha 1996, OBBTree): a cheap no for most
- * neighbours; a yes may still have no sub-contact (the rounded corners lie inside the outer box). */
-inline bool outerBoxesApart(const Box &A, const Box &B, const Pose &p)
+/* Edge eb of B in A's frame: the box around it, and whether it may meet A's inner box (where two
+ * inner edges can cross, an overlap beyond r_A + r_B). */
+struct EdgeBox {
+  double low[3], high[3];
+  bool inner;
+};
+
+inline void edgeBox(const Box &A, const Pose &p, int eb, EdgeBox &box)
+{
+  const double *b0 = p.b_in_a[edgeStart(eb)], *b1 = p.b_in_a[edgeEnd(eb)];
+  box.inner = true;
+  for (int m = 0; m < 3; m++) {
+    box.low[m] = std::min(b0[m], b1[m]);
+    box.high[m] = std::max(b0[m], b1[m]);
+    if (box.low[m] > A.h[m] * (1.0 + 1e-9) || box.high[m] < -A.h[m] * (1.0 + 1e-9)) box.inner = false;
+  }
+}
+
+/* Whether edge ea of A and a B edge in box `b` may touch (a necessary condition of edgeAgainstEdge,
+ * much cheaper): the edges' boxes, grown by the reach, meet and, unless B's edge may reach into A's
+ * inner box, B's edge reaches into the outward region of A's edge (a contact's normal lies in A's
+ * edge cone, to the cone's 0.01: inEdgeCone). */
+inline bool edgePairMayTouch(const Box &A, int ea, const EdgeBox &b, double reach)
+{
+  const int ka = ea / 4, k1 = (ka + 1) % 3, k2 = (ka + 2) % 3;
+  if (b.low[ka] > A.h[ka] + reach || b.high[ka] < -A.h[ka] - reach) return false;
+  const double a1 = (ea & 1) ? A.h[k1] : -A.h[k1], a2 = (ea & 2) ? A.h[k2] : -A.h[k2];
+  if (b.low[k1] > a1 + reach || b.high[k1] < a1 - reach) return false;
+  if (b.low[k2] > a2 + reach || b.high[k2] < a2 - reach) return false;
+  if (b.inner) return true;
+  const double lean = 1e-2 * reach;
+  const double out1 = (ea & 1) ? b.high[k1] - a1 : a1 - b.low[k1];
+  const double out2 = (ea & 2) ? b.high[k2] - a2 : a2 - b.low[k2];
+  return out1 >= -lean && out2 >= -lean;
+}
+
+/* How far apart the two outer boxes (inner half extents + rounding) are along the first of the 15
+ * axes of the separating axis test (Gottschalk, Lin & Manocha 1996, OBBTree) that parts them: a
+ * cheap no for most neighbours. Returns a lower bound of the distance between the two bodies (m,
+ * > 0: the outer boxes hold them) or -1 when no axis parts them (they may still have no
+ * sub-contact: the rounded corners lie inside the outer box). On an edge-pair axis the gap is
+ * measured along the unnormalised cross product, whose length is at most 1: a lower bound. */
+inline double outerBoxesApart(const Box &A, const Box &B, const Pose &p)
 {
   double ea[3], eb[3], absR[3][3];
   const double (*Rab)[3] = p.R;
@@ -281,11 +333,14 @@ inline bool outerBoxesApart(const Box &A, const Box &B, const Pose &p)
   for (int k = 0; k < 3; k++) { ea[k] = A.h[k] + A.r; eb[k] = B.h[k] + B.r; }
   for (int i = 0; i < 3; i++)
     for (int j = 0; j < 3; j++) absR[i][j] = std::fabs(Rab[i][j]) + 1e-12;
-  for (int i = 0; i < 3; i++)
-    if (std::fabs(t[i]) > ea[i] + eb[0] * absR[i][0] + eb[1] * absR[i][1] + eb[2] * absR[i][2]) return true;
+  for (int i = 0; i < 3; i++) {
+    const double gap = std::fabs(t[i]) - (ea[i] + eb[0] * absR[i][0] + eb[1] * absR[i][1] + eb[2] * absR[i][2]);
+    if (gap > 0.0) return gap;
+  }
   for (int j = 0; j < 3; j++) {
     const double along = t[0] * Rab[0][j] + t[1] * Rab[1][j] + t[2] * Rab[2][j];
-    if (std::fabs(along) > eb[j] + ea[0] * absR[0][j] + ea[1] * absR[1][j] + ea[2] * absR[2][j]) return true;
+    const double gap = std::fabs(along) - (eb[j] + ea[0] * absR[0][j] + ea[1] * absR[1][j] + ea[2] * absR[2][j]);
+    if (gap > 0.0) return gap;
   }
   for (int i = 0; i < 3; i++) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
@@ -293,22 +348,36 @@ inline bool outerBoxesApart(const Box &A, const Box &B, const Pose &p)
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       const double ra = ea[i1] * absR[i2][j] + ea[i2] * absR[i1][j];
       const double rb = eb[j1] * absR[i][j2] + eb[j2] * absR[i][j1];
-      if (std::fabs(t[i2] * Rab[i1][j] - t[i1] * Rab[i2][j]) > ra + rb) return true;
+      const double gap = std::fabs(t[i2] * Rab[i1][j] - t[i1] * Rab[i2][j]) - (ra + rb);
+      if (gap > 0.0) return gap;
     }
   }
-  return false;
+  return -1.0;
 }
 
-/* Every sub-contact between two rounded boxes (A first: callers put the lower atom tag as A, so the
- * same pair gives the same numbers on every process). Returns how many were written to out. */
-inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
+/* How far apart two bodies are by their bounding spheres, then their outer boxes' separating axes: a
+ * lower bound of their distance (m, > 0), or -1 when neither parts them. */
+inline double boxesApart(const Box &A, const Box &B)
 {
-  // bounding spheres, then the outer boxes' separating axes
   const double d[3] = { A.c[0] - B.c[0], A.c[1] - B.c[1], A.c[2] - B.c[2] };
-  if (dot(d, d) >= (A.bound + B.bound) * (A.bound + B.bound)) return 0;
+  const double reach_both = A.bound + B.bound;
+  const double squared = dot(d, d);
+  if (squared >= reach_both * reach_both) {
+    const double apart = std::sqrt(squared) - reach_both;
+    return apart > 0.0 ? apart : -1.0;
+  }
   Pose p;
   relativeFrame(A, B, p);
-  if (outerBoxesApart(A, B, p)) return 0;
+  return outerBoxesApart(A, B, p);
+}
+
+/* Every sub-contact between two rounded boxes that boxesApart does not part (A first: callers put
+ * the lower atom tag as A, so the same pair gives the same numbers on every process). Returns how
+ * many were written to out. */
+inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
+{
+  Pose p;
+  relativeFrame(A, B, p);
   relativeVertices(A, B, p);
   // each vertex against the other inner box grown by the reach: a vertex beyond one of its faces
   // touches nothing, an edge whose two ends are beyond the same face neither
@@ -329,9 +398,13 @@ inline int boxBoxContacts(const Box &A, const Box &B, SubContact *out)
     if (!(code_a[edgeStart(e)] & code_a[edgeEnd(e)])) near_a[na++] = e;
     if (!(code_b[edgeStart(e)] & code_b[edgeEnd(e)])) near_b[nb++] = e;
   }
+  if (!na || !nb) return n;
+  EdgeBox boxes[12];
+  for (int j = 0; j < nb; j++) edgeBox(A, p, near_b[j], boxes[j]);
   for (int i = 0; i < na; i++)
     for (int j = 0; j < nb; j++)
-      if (edgeAgainstEdge(A, near_a[i], B, near_b[j], p, 16 + 12 * near_a[i] + near_b[j], out[n])) n++;
+      if (edgePairMayTouch(A, near_a[i], boxes[j], reach)
+          && edgeAgainstEdge(A, near_a[i], B, near_b[j], p, 16 + 12 * near_a[i] + near_b[j], out[n])) n++;
   return n;
 }
 

@@ -24,7 +24,8 @@ from typing import Callable
 SOURCE_DIR = Path(__file__).resolve().parents[3] / "custom_contact"
 SOURCES = ("normal_model_bilinear.h", "plugin.cpp", "build.sh")
 LIBRARY = "libdemorch_bilinear.so"
-SUPERQUADRIC_SOURCES = ("normal_model_bilinear.h", "build_liggghts.sh", "roundedbox_geometry.h", "roundedbox_law.h",
+SUPERQUADRIC_SOURCES = ("normal_model_bilinear.h", "build_liggghts.sh", "roundedbox_geometry.h", "roundedbox_candidates.h",
+                        "roundedbox_law.h",
                         "pair_roundedbox.h", "pair_roundedbox.cpp", "fix_wall_roundedbox.h", "fix_wall_roundedbox.cpp",
                         "fix_roundedbox_history.h", "fix_roundedbox_history.cpp")
 SUPERQUADRIC_EXECUTABLE = "liggghts"
