@@ -13,7 +13,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Annotated, Literal, Union
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from orchestrator.bodies import Bodies, BrickShape, Clump, Sphere  # noqa: F401  (re-exported: the case's sections)
 from orchestrator.capabilities import DEFAULT_ENGINE, ENGINE_NAMES, Engine, capabilities
@@ -156,6 +156,14 @@ class Case(EngineSections, Strict):
     engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 12345
     time: TimeSettings
+    # For a case made from another file (a study): the names that file gives the case's fields
+    # (parse_case's `fields`), so that the pre-flight checks name what its user wrote. Not a field.
+    _field_names: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @property
+    def field_names(self) -> Mapping[str, str]:
+        """The names the file this case was made from gives its fields ({} for a case file)."""
+        return self._field_names
     gravity: tuple[Acceleration, Acceleration, Acceleration] = (0.0, 0.0, -9.81)
     materials: Annotated[list[Material], Field(min_length=1, max_length=32)]
     contacts: Annotated[list[ContactPair], Field(min_length=1)]
@@ -325,14 +333,21 @@ def parse_case(data: object, source: str = "case", fields: Mapping[str, str] | N
     if not isinstance(data, dict):
         raise CaseError(f"{source}: the case must be a mapping of fields, got {type(data).__name__}")
     try:
-        return parse_model(Case, data, source)
+        case = parse_model(Case, data, source)
     except CaseError as error:
         if not fields:
             raise
-        message = str(error)
-        for case_field, name in fields.items():
-            message = re.sub(rf"(?<![\w.]){re.escape(case_field)}(?![\w])", name, message)
-        raise CaseError(message) from None
+        raise CaseError(renamed(str(error), fields)) from None
+    if fields:
+        case._field_names = dict(fields)
+    return case
+
+
+def renamed(message: str, fields: Mapping[str, str]) -> str:
+    """`message` with each case field path in `fields` renamed whole (parse_case's `fields`)."""
+    for case_field, name in fields.items():
+        message = re.sub(rf"(?<![\w.]){re.escape(case_field)}(?![\w])", name, message)
+    return message
 
 
 def load_case(path: str | Path) -> Case:

@@ -20,7 +20,7 @@ import numpy as np
 
 from orchestrator import geometry, physics, preflight
 from orchestrator.capabilities import capabilities
-from orchestrator.case import Case, Domain
+from orchestrator.case import Case, CaseError, Domain, renamed
 from orchestrator.estimate import OutputEstimate, estimate
 from orchestrator.shapes import BodyShape
 
@@ -115,8 +115,14 @@ def make_plan(case: Case, case_dir: Path) -> RunPlan:
     shapes = physics.clump_shapes(case)
     table = tuple(physics.bodies(case, shapes))
     triangles = tuple(geometry.wall_triangles(wall, case_dir) for wall in case.walls)
-    output = estimate(case, schedule, table)
-    preflight.check_all(case, case_dir, schedule, table, triangles, output)
+    try:
+        output = estimate(case, schedule, table)
+        preflight.check_all(case, case_dir, schedule, table, triangles, output)
+    except CaseError as error:
+        # a study's stage names its own fields (release.duration, not time.duration)
+        if not case.field_names:
+            raise
+        raise CaseError(renamed(str(error), case.field_names)) from None
     can = capabilities(case.engine)
     # An engine without the compiled law runs a dashpot in its place; an implicit one has no stiffness to damp.
     pairs = tuple(physics.pair_constants(case, dashpot_for_bilinear=not can.compiled_law, damping=not can.implicit))

@@ -10,7 +10,8 @@ import pytest
 
 from orchestrator.studies.avalanche.geometry import AvalancheGeometry, apparent_density, brick_count, ordered_pile, rain_positions
 from orchestrator.studies.avalanche.study import AvalancheStudy, packing_case, run_study
-from orchestrator.shapes.clump import BrickClump, quaternion_matrix
+from orchestrator.shapes.clump import BrickClump
+from orchestrator.shapes.rigid import quaternion_matrix
 from orchestrator.engines.liggghts import adapter as liggghts
 from orchestrator.results import Trajectory, read_results
 from orchestrator.results import RESULTS
@@ -122,7 +123,18 @@ def test_flips_are_refused_for_a_random_pour() -> None:
         AvalancheStudy.model_validate({"name": "x", "packing": {"kind": "random_pour", "flips": True}})
 
 
+def test_a_stages_pre_flight_checks_name_the_studys_fields(tmp_path: Path) -> None:
+    """The checks made before an engine starts (orchestrator.preflight) speak of the study's own
+    fields for a study's stage: a packing of 100 s written every 10 µs is 10 million frames, over the
+    million allowed."""
+    from orchestrator.case import CaseError
+    from orchestrator.plan import make_plan
 
+    study = AvalancheStudy.model_validate({"name": "x", "geometry": {"box_depth": 0.1, "box_width": 0.1, "box_height": 0.1},
+                                           "packing": {"volume": 0.0005, "settle_time": 100.0},
+                                           "release": {"output_interval": 1e-5}})
+    with pytest.raises(CaseError, match=r"^release\.output_interval: 1e-05 s gives [0-9]+ frames"):
+        make_plan(packing_case(study), tmp_path)
 
 
 @pytest.mark.engine

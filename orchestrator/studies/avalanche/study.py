@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from orchestrator import physics
 from orchestrator.capabilities import brick_gaps
 from orchestrator.case import Case
 from orchestrator.engines import RunOptions
@@ -70,8 +71,12 @@ class AvalancheKind(StudyKind):
                 break
             mu = next_mu(trials, target, search.mu_bounds)
         best = closest(trials, target)
+        contacts = study.packing.contacts or study.contacts
+        # what the packing ran with, beside the flow's (the study's packing may be softer: spec.PackingSpec)
         summary: dict[str, Any] = {"brick_brick_mu": best.mu, "trials": [t.as_dict() for t in trials],
-                                  "target_reached": abs(best.off(target)) <= search.tolerance}
+                                  "target_reached": abs(best.off(target)) <= search.tolerance,
+                                  "kn_brick_brick": contacts.brick_brick.kn, "kn_brick_board": contacts.brick_board.kn,
+                                  "time_step_s": physics.schedule(cases[best.mu]).dt}
         # A search that ran out of trials is warned of; a packing asked to pack once (max_trials 1)
         # is not a search: its density and verdict are in the table (table.packing_verdict).
         if not summary["target_reached"] and search.max_trials > 1:

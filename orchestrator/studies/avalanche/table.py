@@ -211,6 +211,9 @@ def comparison_rows(report: dict[str, Any], reference: dict[str, Any], demo: dic
         if packing.get("trials"):
             rows.append(("μ brick/brick while packing", packing["brick_brick_mu"],
                          f"{len(packing['trials'])} trial(s): " + ", ".join(f"{t['mu']:.3g} → {t['apparent_density']:.0f}" for t in packing["trials"]), ""))
+        if packing.get("kn_brick_brick") is not None:
+            rows.append(("k_n brick/brick while packing (N/m)", packing["kn_brick_brick"],
+                         f"step {packing['time_step_s']:.3g} s; the flow: Table 1 unless the study sets contacts", ""))
     return rows
 
 
