@@ -39,7 +39,7 @@ from typing import Callable
 import numpy as np
 
 from orchestrator.bodies import BrickShape
-from orchestrator.shapes.clump import quaternion_matrices, quaternion_matrix
+from orchestrator.shapes.rigid import quaternion_matrices, quaternion_matrix
 from orchestrator.case import Case, parse_case
 from orchestrator.engines import EngineError
 from orchestrator.capabilities import ENGINE_NAMES, ENGINES, engines_with

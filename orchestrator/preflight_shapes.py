@@ -24,7 +24,7 @@ from scipy.spatial import cKDTree
 
 from orchestrator.case import Case, CaseError
 from orchestrator.shapes import BodyShape
-from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.rigid import quaternion_matrices
 from orchestrator.shapes.overlap import box_overlap, pair_overlap
 
 OVERLAP_TOLERANCE = 0.05  # of the smallest half extent of the shapes involved

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.shapes.clump import BrickClump, quaternion_matrix
+from orchestrator.shapes.clump import BrickClump
+from orchestrator.shapes.rigid import quaternion_matrix
 from orchestrator.case import parse_case
 from orchestrator.results import read_results
 from orchestrator.results import RESULTS

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orchestrator.shapes.clump import BrickClump, quaternion_matrix, world_sphere_centres
+from orchestrator.shapes.clump import BrickClump, world_sphere_centres
+from orchestrator.shapes.rigid import quaternion_matrix
 
 L, W, T, RHO = 0.031, 0.015, 0.008, 1700.0
 

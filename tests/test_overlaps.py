@@ -22,7 +22,7 @@ from orchestrator.post import overlaps
 from orchestrator.results import RELEASE_DIR, read_results
 from orchestrator.rundir import read_record
 from orchestrator.runner import run_case
-from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.rigid import quaternion_matrices
 from orchestrator.shapes.overlap import box_overlap, pair_overlap, probe_depth, swept_box_overlap
 from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.studies import brick_drop

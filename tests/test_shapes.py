@@ -15,7 +15,7 @@ import pytest
 
 from orchestrator.case import CaseError, parse_case
 from orchestrator.shapes import KINDS, make_shape
-from orchestrator.shapes.clump import rounded_box_moments
+from orchestrator.shapes.rigid import rounded_box_moments
 from orchestrator.shapes.rounded_box import brick_rounded_box
 from orchestrator.shapes.superquadric import brick_superquadric
 from orchestrator.studies.brick_drop import study_brick

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from orchestrator.shapes.clump import quaternion_matrix
+from orchestrator.shapes.rigid import quaternion_matrix
 from orchestrator.validation import parse_model, read_yaml
 from orchestrator.case import Case, CaseError, Name, Strict, parse_case
 from orchestrator import rundir

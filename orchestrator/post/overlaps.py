@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from orchestrator.shapes import BodyShape
-from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.rigid import quaternion_matrices
 from orchestrator.shapes.overlap import box_overlap, pair_overlap
 
 NESTED_FRACTION = 0.25  # of the thinner body's smallest extent: the study's brick's two roundings, 2 mm

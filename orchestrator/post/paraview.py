@@ -45,7 +45,8 @@ from orchestrator.case import Case
 from orchestrator.post.contacts import force_chains
 from orchestrator.results import Contacts, Trajectory, safe_output_path
 from orchestrator.shapes import KINDS as SHAPE_KINDS
-from orchestrator.shapes.clump import quaternion_matrices, unit_sphere_mesh
+from orchestrator.shapes.clump import unit_sphere_mesh
+from orchestrator.shapes.rigid import quaternion_matrices
 
 KINDS = ("sphere", *SHAPE_KINDS)  # the parts of a frame, in this order
 RESOLUTION = {"sphere": 8, **{name: kind.mesh_resolution for name, kind in SHAPE_KINDS.items()}}  # latitudes of a surface mesh, per kind

@@ -8,7 +8,7 @@ edges is a contact point of its own (custom_contact/roundedbox_geometry.h): a fa
 the corners of their overlap (16 points aligned, 8 offset, 4 crossed at 90°), so the resultant can
 sit anywhere in the overlap and a brick slides on a brick at the friction angle.
 
-Mass and inertia are the rounded solid's, in closed form (shapes/clump.py `rounded_box_moments`).
+Mass and inertia are the rounded solid's, in closed form (shapes/rigid.py `rounded_box_moments`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """What the kinds that are one body share: one particle, sized by its bounding radius, with the true
 brick's volume, mass and inertia: a length × width ×
 thickness box whose edges and corners are rounded at `rounding` (the 2012 study's brick: 31 × 15 ×
-8 mm, 1 mm), in closed form (shapes/clump.py `rounded_box_moments`), whatever surface the kind
+8 mm, 1 mm), in closed form (shapes/rigid.py `rounded_box_moments`), whatever surface the kind
 gives it (the superquadric's own, or the rounded box itself). A given mass or inertia wins.
 """
 
@@ -11,7 +11,7 @@ from functools import cached_property
 
 import numpy as np
 
-from orchestrator.shapes.clump import rounded_box_moments
+from orchestrator.shapes.rigid import inertia_tensor, rounded_box_moments
 
 
 class OneBodyBrick:
@@ -34,7 +34,7 @@ class OneBodyBrick:
     @cached_property
     def _moments(self) -> tuple[float, np.ndarray]:
         volume, _, covariance = rounded_box_moments(2.0 * self.half_axes, self.rounding)
-        return volume, np.diag(covariance)
+        return volume, covariance
 
     @property
     def volume(self) -> float:
@@ -48,11 +48,7 @@ class OneBodyBrick:
     @cached_property
     def inertia_tensor(self) -> np.ndarray:
         """(3, 3) inertia about the centre of mass in the brick axes (diagonal), kg m²."""
-        if self.inertia_given is not None:
-            return np.diag(np.asarray(self.inertia_given, dtype=float))
-        second = self._moments[1]
-        density = self.mass / self.volume
-        return density * np.diag([second[1] + second[2], second[0] + second[2], second[0] + second[1]])
+        return inertia_tensor(self._moments[1], self.mass, self.volume, self.inertia_given)
 
     @property
     def principal_inertia(self) -> np.ndarray:

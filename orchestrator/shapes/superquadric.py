@@ -10,7 +10,7 @@ face is a row of spheres that a neighbour's corner sinks between, a superquadric
 so two bricks slide on each other at the friction angle (tests/test_brick_pair.py).
 
 The body gets the true brick's mass and inertia (the study's brick: 31 × 15 × 8 mm with 1 mm rounded
-edges, shapes/clump.py `rounded_box_moments`), never those of the superquadric's own volume, so a
+edges, shapes/rigid.py `rounded_box_moments`), never those of the superquadric's own volume, so a
 brick's dynamics do not depend on its blockiness; only its surface does.
 """
 

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.shapes import BodyShape
-from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.rigid import quaternion_matrices
 from orchestrator.case import Case, parse_case
 from orchestrator.results import RELEASE_DIR, RESULTS, Trajectory, read_results
 from orchestrator.runner import run_case

@@ -18,7 +18,7 @@ import meshio
 import numpy as np
 
 from orchestrator.shapes import BodyShape
-from orchestrator.shapes.clump import quaternion_matrices
+from orchestrator.shapes.rigid import quaternion_matrices
 from orchestrator.figures import subplots
 from orchestrator.post import deposit
 from orchestrator.post.contacts import force_chains

@@ -61,7 +61,7 @@ class BrickSpec(Brick):
     thickness: Real(unit="m", ge=MIN_SIZE, le=1.0) = 0.008
     bevel_deg: Real(unit="°", ge=0.0, le=10.0) = 0.0  # the paper's modified bricks: 2.0 (three faces turned; see shapes/clump.py)
     # The study's brick has its edges and corners rounded at 1 mm: eight corner spheres of that radius
-    # join the layout, and the brick gets the rounded solid's mass and inertia (shapes/clump.py). With them
+    # join the layout, and the brick gets the rounded solid's mass and inertia (shapes/rigid.py). With them
     # the single-brick drops of the study are reproduced (tests/test_brick_drop.py). 0: a sharp box
     # (required with a bevel).
     rounding: Real(unit="m", ge=0.0, le=0.01) = 0.001
