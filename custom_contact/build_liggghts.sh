@@ -51,6 +51,9 @@ cp "$here"/roundedbox_geometry.h "$here"/roundedbox_candidates.h "$here"/rounded
 
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# ccache: paths relative to the (temporary) build folder, so a rebuild of changed contact code in
+# another folder finds the rest of LIGGGHTS in the cache
+export CCACHE_BASEDIR="$work" CCACHE_NOHASHDIR=true
 flags="-O2 -funroll-loops -fstrict-aliasing -w -std=c++11 -fPIC -DSUPERQUADRIC_ACTIVE_FLAG -DNONSPHERICAL_ACTIVE_FLAG -DHAVE_TR1_CMATH"
 mkdir -p "$work/build"
 cd "$work/build"

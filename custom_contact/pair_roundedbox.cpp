@@ -153,12 +153,13 @@ void PairRoundedBox::track_motion(int nall, bool rebuilt)
   double **x = atom->x, **q = atom->quaternion;
   if (static_cast<int>(travel_.size()) < nall) {
     travel_.resize(nall);
+    step_.resize(nall);
     last_x_.resize(3 * nall);
     last_q_.resize(4 * nall);
   }
   for (int i = 0; i < nall; i++) {
     double *lx = &last_x_[3 * i], *lq = &last_q_[4 * i];
-    if (rebuilt) travel_[i] = 0.0;
+    if (rebuilt) travel_[i] = 0.0;  // step_ keeps the last step's: how fast the body moves
     else {
       // a point at distance rho from the centre moves by at most |dx| + 2 rho min(|q - q'|, |q + q'|)
       // under a rotation from unit quaternion q' to q (its chord is 2 rho sin(angle / 2))
@@ -169,7 +170,8 @@ void PairRoundedBox::track_motion(int nall, bool rebuilt)
         plus += (q[i][k] + lq[k]) * (q[i][k] + lq[k]);
       }
       const double moved = std::sqrt(dx) + 2.0 * boxes_[i].bound * std::sqrt(MIN(minus, plus));
-      travel_[i] += moved * (1.0 + 1e-6) + 1e-15;
+      step_[i] = moved * (1.0 + 1e-6) + 1e-15;
+      travel_[i] += step_[i];
     }
     for (int k = 0; k < 3; k++) lx[k] = x[i][k];
     for (int k = 0; k < 4; k++) lq[k] = q[i][k];
@@ -199,7 +201,7 @@ void PairRoundedBox::compute(int eflag, int vflag)
   const bool rebuilt = neighbor->ago == 0 || static_cast<int>(entries_.size()) != entries;
   track_motion(nall, rebuilt);
   if (rebuilt) {
-    const Entry unknown = { -1.0, 0.0, -1, false };
+    const Entry unknown = { -1.0, 0.0, 0.0, -1, false };
     entries_.assign(entries, unknown);
     lists_.clear();
   }
@@ -219,7 +221,7 @@ void PairRoundedBox::compute(int eflag, int vflag)
       const bool i_first = tag[i] < tag[j];
       const int a = i_first ? i : j, b = i_first ? j : i;
       int n;
-      if (known.listed && travelled - known.travel < skin_)
+      if (known.listed && travelled - known.travel < known.skin)
         n = candidateContacts(boxes_[a], boxes_[b], &lists_[known.list + 1], lists_[known.list], sub);
       else {
         known.travel = travelled;
@@ -233,7 +235,10 @@ void PairRoundedBox::compute(int eflag, int vflag)
           lists_.resize(lists_.size() + 1 + MAX_CANDIDATES);
         }
         unsigned char *listed = &lists_[known.list];
-        const int count = candidates(boxes_[a], boxes_[b], skin_, listed + 1);
+        // a skin the pair takes about LIST_STEPS steps to cross at its last step's pace, at least skin_,
+        // at most the reach (a wider one lists features that touch nothing for long)
+        known.skin = std::min(2.0 * rounding_, std::max(skin_, LIST_STEPS * (step_[i] + step_[j])));
+        const int count = candidates(boxes_[a], boxes_[b], known.skin, listed + 1);
         known.listed = count >= 0;
         listed[0] = static_cast<unsigned char>(known.listed ? count : 0);
         n = known.listed ? candidateContacts(boxes_[a], boxes_[b], listed + 1, count, sub) : boxBoxContacts(boxes_[a], boxes_[b], sub);

@@ -49,15 +49,17 @@ class PairRoundedBox : public Pair {
   // entry, what was known of the pair and the two bodies' travel then. A pair found apart is tested
   // again once their travels since could close that distance; a pair near or touching keeps the
   // features within the reach plus skin_ (roundedbox_candidates.h: a list in lists_) until their
-  // travels since could exceed the skin.
+  // travels since could exceed the skin, sized so that a list lasts about LIST_STEPS steps.
+  static const int LIST_STEPS = 20;
   struct Entry {
     double apart;          // a lower bound of the distance when found apart (m), else -1
     double travel;         // the two bodies' travel then (m)
+    double skin;           // the skin its list was made with (m)
     int list;              // index of its list in lists_ (-1: none; count first, then the keys)
     bool listed;           // the list holds the features within reach of `travel`
   };
-  double skin_;
-  std::vector<double> travel_, last_x_, last_q_;
+  double skin_;           // the least skin (m); a pair moving fast gets more (compute)
+  std::vector<double> travel_, step_, last_x_, last_q_;  // step_: each body's travel bound over the last step (m)
   std::vector<Entry> entries_;
   std::vector<unsigned char> lists_;
   void track_motion(int nall, bool rebuilt);
