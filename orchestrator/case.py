@@ -156,14 +156,6 @@ class Case(EngineSections, Strict):
     engine: Engine = Engine(DEFAULT_ENGINE)
     seed: Annotated[int, Field(ge=1, le=2**31 - 1)] = 12345
     time: TimeSettings
-    # For a case made from another file (a study): the names that file gives the case's fields
-    # (parse_case's `fields`), so that the pre-flight checks name what its user wrote. Not a field.
-    _field_names: dict[str, str] = PrivateAttr(default_factory=dict)
-
-    @property
-    def field_names(self) -> Mapping[str, str]:
-        """The names the file this case was made from gives its fields ({} for a case file)."""
-        return self._field_names
     gravity: tuple[Acceleration, Acceleration, Acceleration] = (0.0, 0.0, -9.81)
     materials: Annotated[list[Material], Field(min_length=1, max_length=32)]
     contacts: Annotated[list[ContactPair], Field(min_length=1)]
@@ -191,6 +183,15 @@ class Case(EngineSections, Strict):
     # tangential force, branch; per-body contact counts and force sums; coordination number). Opt-in:
     # a dense pile has several contacts per body, so this multiplies the output.
     record_contacts: bool = False
+
+    # For a case made from another file (a study): the names that file gives the case's fields
+    # (parse_case's `fields`), so that the pre-flight checks name what its user wrote. Not a field.
+    _field_names: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @property
+    def field_names(self) -> Mapping[str, str]:
+        """The names the file this case was made from gives its fields ({} for a case file)."""
+        return self._field_names
 
     @model_validator(mode="after")
     def _cross_references(self) -> "Case":
